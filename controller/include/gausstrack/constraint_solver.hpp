@@ -1,0 +1,383 @@
+// Explicit constrained accelerations (eq. 30) and constraint force (eq. 32) of Kalaba & Udwadia,
+// J. Appl. Mech. 60 (1993), for compile-time sizes, without allocating and without throwing.
+//
+// Problem, at one instant (q, q', t):
+//   A q'' + f = Q + Q'        A: N x N symmetric positive definite (mass matrix)  [kg, kg m^2]
+//   D q'' = g                 D: P x N constraint matrix, g: P right side
+// Gauss's principle (eq. 14/16): q'' minimises (A q'' + f - Q)^T A^-1 (A q'' + f - Q) subject to
+// D q'' = g, equivalently Q' minimises Q'^T A^-1 Q'.
+//
+// Computation. With A = L L^T (Cholesky), a = A^-1 (Q - f) the unconstrained acceleration and
+// B = D L^-T (P x N; it has the singular values of D A^(-1/2)):
+//   Q'  = L B^+ (g - D a)                                       (eq. 32, compact form)
+//   q'' = a + A^-1 Q' = a + L^-T B^+ (g - D a)                  (eq. 30)
+// This is the same force as A^(1/2) (D A^(-1/2))^+ (g - D a): A^(1/2) = L U for an orthogonal U,
+// so both are the Moore-Penrose (minimum A^-1-norm) answer. Eq. (32)'s two terms are the parts
+// linear in (f - Q) and in g:
+//   (I - A X A^-1)(f - Q) = L B^+ D A^-1 (f - Q) = L B^+ (-D a)    "force_from_impressed"
+//   A (I - X) D^- g       = L B^+ g                                 "force_from_rhs"
+// (They are unique whatever g-inverses eq. 32 uses, since the constrained motion is unique.)
+//
+// Strategies for y = B^+ r (all allocation-free for fixed sizes):
+// - kCholeskyWithFallback (default): normal equations, y = B^T (B B^T)^-1 r with B B^T = D A^-1 D^T
+//   factored by LLT. Exact Moore-Penrose answer when rank(D) = P. Its rounding error grows like
+//   eps * cond(B)^2, so when LLT fails or its reciprocal condition estimate falls below
+//   `fallback_rcond` the call answers by kSvd instead and sets warning::kFellBackToSvd.
+// - kSvd: Moore-Penrose inverse by JacobiSVD of B; singular values sigma_i <= rank_tolerance *
+//   sigma_max are treated as zero.
+// - kCompleteOrthogonal: complete orthogonal decomposition B Pi = Q [T11 0; 0 0] Z, rank decided by
+//   the same relative tolerance on the column-pivoted QR diagonal; minimum-norm solve written here
+//   with a fixed-size workspace (Eigen's COD::solve allocates a temporary even for fixed sizes).
+// - kDampedLeastSquares: y = B^T (B B^T + lambda^2 I)^-1 r. Each singular direction sigma_i of B
+//   meets only sigma_i^2 / (sigma_i^2 + lambda^2) of its constraint, so D q'' = g holds with a
+//   relative error of about lambda^2 / sigma_min^2 in exchange for a force bounded by
+//   |r| / (2 lambda) near singular configurations. lambda = 0 gives the plain normal equations
+//   (falling back to kSvd when singular).
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "gausstrack/status.hpp"
+
+namespace gausstrack {
+
+/// Generalized-inverse strategy for B^+ = (D A^(-1/2))^+ (see the file comment).
+enum class InverseStrategy : std::uint8_t {
+  kCholeskyWithFallback,
+  kSvd,
+  kCompleteOrthogonal,
+  kDampedLeastSquares,
+};
+
+constexpr const char* to_string(InverseStrategy s) noexcept {
+  switch (s) {
+    case InverseStrategy::kCholeskyWithFallback: return "cholesky";
+    case InverseStrategy::kSvd: return "svd";
+    case InverseStrategy::kCompleteOrthogonal: return "cod";
+    case InverseStrategy::kDampedLeastSquares: return "damped";
+  }
+  return "unknown";
+}
+
+template <typename Scalar>
+struct SolverOptions {
+  static constexpr Scalar kEps = std::numeric_limits<Scalar>::epsilon();
+
+  InverseStrategy strategy = InverseStrategy::kCholeskyWithFallback;
+  /// Relative rank tolerance: a singular value sigma_i of D A^(-1/2) counts when
+  /// sigma_i > rank_tolerance * sigma_max. A value <= 0 selects max(N, P) * eps, the LAPACK and
+  /// MATLAB `rank` convention.
+  Scalar rank_tolerance = Scalar(-1);
+  /// The Cholesky path answers only when the reciprocal condition estimate of D A^-1 D^T is at
+  /// least this: cond(D A^(-1/2)) up to about 1e3 for double (normal-equations error
+  /// eps * cond^2 below about 2e-10), about 30 for float.
+  Scalar fallback_rcond = std::numeric_limits<Scalar>::digits > 24 ? Scalar(1e-6) : Scalar(1e-3);
+  /// lambda of kDampedLeastSquares, in the units of the singular values of D A^(-1/2).
+  Scalar damping = Scalar(0);
+  /// warning::kConstraintsNotMet when ||D q'' - g|| > residual_tolerance (||g|| + ||D||_F ||q''||).
+  Scalar residual_tolerance = std::sqrt(kEps);
+  /// warning::kIllConditioned when the condition estimate of D A^(-1/2) exceeds this.
+  Scalar warn_condition = Scalar(1) / std::sqrt(kEps);
+};
+
+/// Diagnostics of one solve. Singular values are those of B = D L^-T, which equal those of
+/// D A^(-1/2): exact for kSvd, estimates from a triangular factor's diagonal otherwise.
+template <typename Scalar>
+struct SolveDiagnostics {
+  Status status = Status::kOk;
+  std::uint32_t warnings = 0;           ///< warning::* flags
+  std::uint32_t non_finite_inputs = 0;  ///< input::* flags (with Status::kNonFiniteInput)
+  InverseStrategy strategy_used = InverseStrategy::kCholeskyWithFallback;
+  int rank = 0;                         ///< numerical rank of D A^(-1/2)
+  Scalar sigma_max = Scalar(0);         ///< largest singular value of D A^(-1/2)
+  Scalar sigma_min_kept = Scalar(0);    ///< smallest singular value treated as nonzero
+  Scalar condition_estimate = Scalar(0);  ///< sigma_max / sigma_min_kept (0 when rank is 0)
+  Scalar residual_norm = Scalar(0);     ///< ||D q'' - g||
+
+  bool has(std::uint32_t warning_flag) const noexcept { return (warnings & warning_flag) != 0; }
+};
+
+/// Result of one solve. On failure every vector is zero.
+template <int N, int P, typename Scalar = double>
+struct ConstraintSolution {
+  using VectorN = Eigen::Matrix<Scalar, N, 1>;
+  VectorN acceleration = VectorN::Zero();                ///< q'', eq. (30)            [m/s^2]
+  VectorN constraint_force = VectorN::Zero();            ///< Q', eq. (32)             [N]
+  VectorN force_from_impressed = VectorN::Zero();        ///< (I - A X A^-1)(f - Q)    [N]
+  VectorN force_from_rhs = VectorN::Zero();              ///< A (I - X) D^- g          [N]
+  VectorN unconstrained_acceleration = VectorN::Zero();  ///< a = A^-1 (Q - f)         [m/s^2]
+  SolveDiagnostics<Scalar> diagnostics;
+};
+
+/// Solver for eq. (30) and eq. (32) with N coordinates and P constraint rows. Owns its workspace;
+/// `solve` never allocates and never throws.
+template <int N, int P, typename Scalar = double>
+class ConstraintSolver {
+  static_assert(N >= 1 && P >= 1, "ConstraintSolver needs at least one coordinate and one row");
+
+ public:
+  using MatrixNN = Eigen::Matrix<Scalar, N, N>;
+  using MatrixPN = Eigen::Matrix<Scalar, P, N>;
+  using MatrixNP = Eigen::Matrix<Scalar, N, P>;
+  using MatrixPP = Eigen::Matrix<Scalar, P, P>;
+  using VectorN = Eigen::Matrix<Scalar, N, 1>;
+  using VectorP = Eigen::Matrix<Scalar, P, 1>;
+  using Solution = ConstraintSolution<N, P, Scalar>;
+  using Options = SolverOptions<Scalar>;
+
+  explicit ConstraintSolver(const Options& options = Options{}) noexcept { set_options(options); }
+
+  void set_options(const Options& options) noexcept {
+    options_ = options;
+    if (!(options_.rank_tolerance > Scalar(0))) {
+      options_.rank_tolerance = Scalar(std::max(N, P)) * std::numeric_limits<Scalar>::epsilon();
+    }
+    if (!(options_.damping >= Scalar(0))) options_.damping = Scalar(0);
+  }
+  const Options& options() const noexcept { return options_; }
+
+  /// Constrained accelerations (eq. 30), constraint force (eq. 32) and its two terms for
+  /// A (N x N), f, Q (N), D (P x N), g (P). Returns the status also stored in
+  /// out.diagnostics.status.
+  template <typename DA, typename Df, typename DQ, typename DD, typename Dg>
+  Status solve(const Eigen::MatrixBase<DA>& A, const Eigen::MatrixBase<Df>& f,
+               const Eigen::MatrixBase<DQ>& Q, const Eigen::MatrixBase<DD>& D,
+               const Eigen::MatrixBase<Dg>& g, Solution& out) noexcept {
+    ready_ = false;
+    out.diagnostics = SolveDiagnostics<Scalar>{};
+    SolveDiagnostics<Scalar>& diag = out.diagnostics;
+
+    std::uint32_t bad = 0;
+    if (!A.allFinite()) bad |= input::kMassMatrix;
+    if (!f.allFinite()) bad |= input::kNonlinearForce;
+    if (!Q.allFinite()) bad |= input::kAppliedForce;
+    if (!D.allFinite()) bad |= input::kConstraintMatrix;
+    if (!g.allFinite()) bad |= input::kConstraintRhs;
+    if (bad != 0) {
+      diag.non_finite_inputs = bad;
+      return fail(out, Status::kNonFiniteInput);
+    }
+
+    mass_llt_.compute(A);
+    if (mass_llt_.info() != Eigen::Success) return fail(out, Status::kMassMatrixNotPositiveDefinite);
+
+    // a = A^-1 (Q - f);  B^T = L^-1 D^T.
+    out.unconstrained_acceleration = mass_llt_.solve(Q - f);
+    bt_ = D.transpose();
+    mass_llt_.matrixL().solveInPlace(bt_);
+
+    // Right sides of the two eq. (32) terms, solved together.
+    Eigen::Matrix<Scalar, P, 2> rhs;
+    rhs.col(0).noalias() = -(D * out.unconstrained_acceleration);
+    rhs.col(1) = g;
+    factorize(diag);
+    Eigen::Matrix<Scalar, N, 2> y;
+    apply_pseudo_inverse(rhs, y);
+
+    out.force_from_impressed.noalias() = mass_llt_.matrixL() * y.col(0);
+    out.force_from_rhs.noalias() = mass_llt_.matrixL() * y.col(1);
+    out.constraint_force = out.force_from_impressed + out.force_from_rhs;
+    VectorN dq = y.col(0) + y.col(1);
+    mass_llt_.matrixU().solveInPlace(dq);  // L^-T y
+    out.acceleration = out.unconstrained_acceleration + dq;
+
+    if (!out.acceleration.allFinite() || !out.constraint_force.allFinite() ||
+        !out.force_from_impressed.allFinite() || !out.force_from_rhs.allFinite()) {
+      return fail(out, Status::kNonFiniteResult);
+    }
+
+    diag.residual_norm = (D * out.acceleration - g).norm();
+    const Scalar scale = g.norm() + D.norm() * out.acceleration.norm();
+    if (diag.residual_norm > options_.residual_tolerance * scale) {
+      diag.warnings |= warning::kConstraintsNotMet;
+    }
+    if (diag.rank < P) diag.warnings |= warning::kRankDeficient;
+    if (diag.condition_estimate > options_.warn_condition) diag.warnings |= warning::kIllConditioned;
+    ready_ = true;
+    return diag.status;
+  }
+
+  /// Constraint force L B^+ rhs that the last successful solve's factorization gives for another
+  /// right side (P): the part of Q' due to a term added to g. Zero if the last solve failed.
+  VectorN force_for_rhs(const VectorP& rhs) const noexcept {
+    if (!ready_) return VectorN::Zero();
+    VectorN y;
+    apply_pseudo_inverse(rhs, y);
+    return mass_llt_.matrixL() * y;
+  }
+
+ private:
+  Status fail(Solution& out, Status status) noexcept {
+    const VectorN zero = VectorN::Zero();
+    out.acceleration = zero;
+    out.constraint_force = zero;
+    out.force_from_impressed = zero;
+    out.force_from_rhs = zero;
+    out.unconstrained_acceleration = zero;
+    out.diagnostics.status = status;
+    out.diagnostics.rank = 0;
+    return status;
+  }
+
+  // Factor B (held as bt_) with the selected strategy; fills the rank diagnostics.
+  void factorize(SolveDiagnostics<Scalar>& diag) noexcept {
+    switch (options_.strategy) {
+      case InverseStrategy::kCholeskyWithFallback:
+        if (!factorize_normal_equations(Scalar(0), true, diag)) {
+          diag.warnings |= warning::kFellBackToSvd;
+          factorize_svd(diag);
+        }
+        return;
+      case InverseStrategy::kDampedLeastSquares:
+        if (!factorize_normal_equations(options_.damping * options_.damping, false, diag)) {
+          diag.warnings |= warning::kFellBackToSvd;
+          factorize_svd(diag);
+        }
+        return;
+      case InverseStrategy::kSvd:
+        factorize_svd(diag);
+        return;
+      case InverseStrategy::kCompleteOrthogonal:
+        factorize_cod(diag);
+        return;
+    }
+  }
+
+  // LLT of B B^T + lambda2 I = D A^-1 D^T + lambda2 I. Returns false when it is not usable.
+  bool factorize_normal_equations(Scalar lambda2, bool require_well_conditioned,
+                                  SolveDiagnostics<Scalar>& diag) noexcept {
+    MatrixPP gram;
+    gram.noalias() = bt_.transpose() * bt_;
+    gram.diagonal().array() += lambda2;
+    gram_llt_.compute(gram);
+    if (gram_llt_.info() != Eigen::Success) return false;
+    const Scalar rcond = gram_llt_.rcond();
+    if (require_well_conditioned && !(rcond >= options_.fallback_rcond)) return false;
+    if (!(rcond > Scalar(0))) return false;
+    used_ = options_.strategy;
+    rank_ = P;
+    const auto d = gram_llt_.matrixLLT().diagonal();
+    diag.strategy_used = used_;
+    diag.rank = P;
+    diag.sigma_max = d.maxCoeff();
+    diag.sigma_min_kept = d.minCoeff();
+    diag.condition_estimate = Scalar(1) / std::sqrt(rcond);
+    return true;
+  }
+
+  void factorize_svd(SolveDiagnostics<Scalar>& diag) noexcept {
+    used_ = InverseStrategy::kSvd;
+    svd_.compute(bt_, Eigen::ComputeFullU | Eigen::ComputeFullV);  // B^T = U S V^T
+    const auto& s = svd_.singularValues();
+    rank_ = 0;
+    if (s(0) > Scalar(0)) {
+      const Scalar cutoff = options_.rank_tolerance * s(0);
+      while (rank_ < P && s(rank_) > cutoff) ++rank_;
+    }
+    set_rank_diagnostics(diag, s(0), rank_ > 0 ? s(rank_ - 1) : Scalar(0));
+  }
+
+  void factorize_cod(SolveDiagnostics<Scalar>& diag) noexcept {
+    used_ = InverseStrategy::kCompleteOrthogonal;
+    cod_.setThreshold(options_.rank_tolerance);
+    b_ = bt_.transpose();
+    cod_.compute(b_);
+    rank_ = static_cast<int>(cod_.rank());
+    Scalar hi(0), lo(0);
+    if (rank_ > 0) {
+      const auto t = cod_.matrixT().diagonal().head(rank_).cwiseAbs();
+      hi = t.maxCoeff();
+      lo = t.minCoeff();
+    }
+    set_rank_diagnostics(diag, hi, lo);
+  }
+
+  void set_rank_diagnostics(SolveDiagnostics<Scalar>& diag, Scalar hi, Scalar lo) const noexcept {
+    diag.strategy_used = used_;
+    diag.rank = rank_;
+    diag.sigma_max = hi;
+    diag.sigma_min_kept = lo;
+    diag.condition_estimate = rank_ > 0 ? hi / lo : Scalar(0);
+  }
+
+  // y = B^+ r for K right sides, with the factorization `factorize` chose.
+  template <int K>
+  void apply_pseudo_inverse(const Eigen::Matrix<Scalar, P, K>& r,
+                            Eigen::Matrix<Scalar, N, K>& y) const noexcept {
+    switch (used_) {
+      case InverseStrategy::kCholeskyWithFallback:
+      case InverseStrategy::kDampedLeastSquares: {
+        Eigen::Matrix<Scalar, P, K> w = r;
+        gram_llt_.solveInPlace(w);
+        y.noalias() = bt_ * w;
+        return;
+      }
+      case InverseStrategy::kSvd: {
+        // B = V S U^T, so B^+ r = sum_i u_i (v_i^T r) / s_i over the kept singular values.
+        y.setZero();
+        for (int i = 0; i < rank_; ++i) {
+          const Eigen::Matrix<Scalar, 1, K> c =
+              (svd_.matrixV().col(i).transpose() * r) / svd_.singularValues()(i);
+          y.noalias() += svd_.matrixU().col(i) * c;
+        }
+        return;
+      }
+      case InverseStrategy::kCompleteOrthogonal:
+        apply_cod_minimum_norm(r, y);
+        return;
+    }
+  }
+
+  // Minimum-norm least-squares solve with B Pi = Q [T11 0; 0 0] Z:
+  //   y = Pi Z^T [T11^-1 (Q^T r)_(1:rank); 0].
+  template <int K>
+  void apply_cod_minimum_norm(const Eigen::Matrix<Scalar, P, K>& r,
+                              Eigen::Matrix<Scalar, N, K>& y) const noexcept {
+    y.setZero();
+    if (rank_ == 0) return;
+    Eigen::Matrix<Scalar, P, K> c = r;
+    Eigen::Matrix<Scalar, K, 1> workspace;
+    const auto& qtz = cod_.matrixQTZ();
+    // c = Q^T r, applying the rank leading reflectors of the pivoted QR.
+    for (int k = 0; k < rank_; ++k) {
+      c.bottomRows(P - k).applyHouseholderOnTheLeft(qtz.col(k).tail(P - k - 1),
+                                                     cod_.hCoeffs()(k), workspace.data());
+    }
+    y.topRows(rank_) = c.topRows(rank_);
+    qtz.topLeftCorner(rank_, rank_).template triangularView<Eigen::Upper>().solveInPlace(
+        y.topRows(rank_));
+    // y = Z^T y: the reflectors Z(k) act on rows {k} and {rank, ..., N-1}.
+    const int tail = N - rank_;
+    if (tail > 0) {
+      for (int k = 0; k < rank_; ++k) {
+        if (k != rank_ - 1) y.row(k).swap(y.row(rank_ - 1));
+        y.middleRows(rank_ - 1, tail + 1)
+            .applyHouseholderOnTheLeft(qtz.row(k).tail(tail).transpose(), cod_.zCoeffs()(k),
+                                       workspace.data());
+        if (k != rank_ - 1) y.row(k).swap(y.row(rank_ - 1));
+      }
+    }
+    const Eigen::Matrix<Scalar, N, K> permuted = y;
+    y.noalias() = cod_.colsPermutation() * permuted;
+  }
+
+  Options options_;
+  Eigen::LLT<MatrixNN> mass_llt_;
+  MatrixNP bt_ = MatrixNP::Zero();  // B^T = L^-1 D^T
+  MatrixPN b_ = MatrixPN::Zero();   // B, for the COD
+  Eigen::LLT<MatrixPP> gram_llt_;
+  Eigen::JacobiSVD<MatrixNP> svd_;
+  Eigen::CompleteOrthogonalDecomposition<MatrixPN> cod_;
+  InverseStrategy used_ = InverseStrategy::kCholeskyWithFallback;
+  int rank_ = 0;
+  bool ready_ = false;
+};
+
+}  // namespace gausstrack

@@ -1,0 +1,7 @@
+// Umbrella header of the gausstrack control-law library.
+#pragma once
+
+#include "gausstrack/constraint_solver.hpp"
+#include "gausstrack/model.hpp"
+#include "gausstrack/status.hpp"
+#include "gausstrack/tracking_controller.hpp"

@@ -1,0 +1,69 @@
+// The paper's formulas written out literally, with Moore-Penrose inverses from an SVD and the
+// symmetric square root of A from an eigendecomposition. Slow and plain on purpose: this is the
+// yardstick tests and benchmarks compare ConstraintSolver against, not a real-time path.
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+
+namespace gausstrack::reference {
+
+/// Moore-Penrose inverse of m: singular values <= relative_tolerance * sigma_max count as zero.
+template <typename Derived>
+Eigen::Matrix<typename Derived::Scalar, Derived::ColsAtCompileTime, Derived::RowsAtCompileTime>
+pseudo_inverse(const Eigen::MatrixBase<Derived>& m, typename Derived::Scalar relative_tolerance) {
+  using Scalar = typename Derived::Scalar;
+  using Plain = typename Derived::PlainObject;
+  Eigen::JacobiSVD<Plain> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const auto& s = svd.singularValues();
+  Eigen::Matrix<Scalar, Derived::ColsAtCompileTime, Derived::RowsAtCompileTime> inv =
+      Eigen::Matrix<Scalar, Derived::ColsAtCompileTime, Derived::RowsAtCompileTime>::Zero(
+          m.cols(), m.rows());
+  if (s.size() == 0 || !(s(0) > Scalar(0))) return inv;
+  for (Eigen::Index i = 0; i < s.size(); ++i) {
+    if (s(i) > relative_tolerance * s(0))
+      inv += svd.matrixV().col(i) * svd.matrixU().col(i).transpose() / s(i);
+  }
+  return inv;
+}
+
+template <int N, typename Scalar>
+struct LiteralSolution {
+  Eigen::Matrix<Scalar, N, 1> acceleration;          // eq. (30a)
+  Eigen::Matrix<Scalar, N, 1> constraint_force;      // eq. (32)
+  Eigen::Matrix<Scalar, N, 1> force_from_impressed;  // (I - A X A^-1)(f - Q)
+  Eigen::Matrix<Scalar, N, 1> force_from_rhs;        // A (I - X) D^- g
+};
+
+/// Eqs. (22), (23), (30a), (32) with D^- = D^+ and H^-_ls = H^+.
+template <int N, int P, typename Scalar>
+LiteralSolution<N, Scalar> literal_formulas(const Eigen::Matrix<Scalar, N, N>& A,
+                                            const Eigen::Matrix<Scalar, N, 1>& f,
+                                            const Eigen::Matrix<Scalar, N, 1>& Q,
+                                            const Eigen::Matrix<Scalar, P, N>& D,
+                                            const Eigen::Matrix<Scalar, P, 1>& g,
+                                            Scalar relative_tolerance = Scalar(1e-10)) {
+  using MatrixNN = Eigen::Matrix<Scalar, N, N>;
+  const MatrixNN I = MatrixNN::Identity();
+  Eigen::SelfAdjointEigenSolver<MatrixNN> eig(A);
+  const MatrixNN a_half = eig.operatorSqrt();              // A^(1/2)
+  const MatrixNN a_minus_half = eig.operatorInverseSqrt(); // A^(-1/2)
+  const Eigen::Matrix<Scalar, N, P> d_minus = pseudo_inverse(D, relative_tolerance);
+  const MatrixNN h_hat = I - d_minus * D;                   // I - D^- D
+  const MatrixNN H = a_half * h_hat;                        // eq. (22)
+  const Eigen::Matrix<Scalar, N, 1> z = -(a_half * d_minus * g + a_minus_half * (f - Q));  // (23)
+  const MatrixNN h_ls = pseudo_inverse(H, relative_tolerance);
+  const MatrixNN X = h_hat * h_ls * a_half;
+  const MatrixNN a_inv = A.llt().solve(I);
+
+  LiteralSolution<N, Scalar> out;
+  out.acceleration = d_minus * g + h_hat * h_ls * z;                    // eq. (30a)
+  out.force_from_impressed = (I - A * X * a_inv) * (f - Q);             // eq. (32), first term
+  out.force_from_rhs = A * (I - X) * d_minus * g;                       // eq. (32), second term
+  out.constraint_force = out.force_from_impressed + out.force_from_rhs;
+  return out;
+}
+
+}  // namespace gausstrack::reference

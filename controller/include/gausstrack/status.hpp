@@ -1,0 +1,54 @@
+// Outcome of a real-time call: whether it failed, and how good the answer is.
+#pragma once
+
+#include <cstdint>
+
+namespace gausstrack {
+
+/// Whether a solve produced an answer. Failures leave every output at zero (never NaN), so a
+/// caller that ignores the status still applies no force rather than garbage.
+enum class Status : std::uint8_t {
+  kOk = 0,                          ///< answer computed; read `warnings` for its quality
+  kNonFiniteInput,                  ///< NaN or Inf in an input; see `non_finite_inputs`
+  kMassMatrixNotPositiveDefinite,   ///< Cholesky of A failed: A is not symmetric positive definite
+  kNonFiniteResult,                 ///< finite input overflowed (entries near the range limit)
+};
+
+/// True when the call produced no answer (outputs are zero).
+constexpr bool failed(Status s) noexcept { return s != Status::kOk; }
+
+constexpr const char* to_string(Status s) noexcept {
+  switch (s) {
+    case Status::kOk: return "ok";
+    case Status::kNonFiniteInput: return "non-finite input";
+    case Status::kMassMatrixNotPositiveDefinite: return "mass matrix not positive definite";
+    case Status::kNonFiniteResult: return "non-finite result";
+  }
+  return "unknown";
+}
+
+/// Quality warnings on a successful solve, as bit flags in `SolveDiagnostics::warnings`.
+namespace warning {
+/// rank(D A^(-1/2)) < P: redundant or locally degenerate constraints.
+inline constexpr std::uint32_t kRankDeficient = 1u << 0;
+/// ||D q'' - g|| above the residual tolerance: the constraints are inconsistent (met in the
+/// least-squares sense) or damping gave part of them up.
+inline constexpr std::uint32_t kConstraintsNotMet = 1u << 1;
+/// condition estimate of D A^(-1/2) above `SolverOptions::warn_condition`.
+inline constexpr std::uint32_t kIllConditioned = 1u << 2;
+/// the full-rank Cholesky path found D A^-1 D^T singular or ill-conditioned and the
+/// rank-revealing SVD path answered instead.
+inline constexpr std::uint32_t kFellBackToSvd = 1u << 3;
+}  // namespace warning
+
+/// Which inputs held a NaN or Inf, as bit flags in `SolveDiagnostics::non_finite_inputs`.
+namespace input {
+inline constexpr std::uint32_t kMassMatrix = 1u << 0;       // A
+inline constexpr std::uint32_t kNonlinearForce = 1u << 1;   // f
+inline constexpr std::uint32_t kAppliedForce = 1u << 2;     // Q
+inline constexpr std::uint32_t kConstraintMatrix = 1u << 3; // D
+inline constexpr std::uint32_t kConstraintRhs = 1u << 4;    // g
+inline constexpr std::uint32_t kState = 1u << 5;            // q, q' or t given to a controller
+}  // namespace input
+
+}  // namespace gausstrack

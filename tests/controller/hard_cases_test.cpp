@@ -1,0 +1,344 @@
+// Hard cases, each with its stated expectation: redundant and inconsistent constraints, nearly
+// singular D, badly conditioned and badly scaled mass matrices, D = 0, P = N - 1, non-finite and
+// extreme input. Across all of them no finite input yields a non-finite output.
+#include <array>
+#include <limits>
+
+#include "gausstrack/constraint_solver.hpp"
+#include "test_support.hpp"
+
+namespace gausstrack::test {
+namespace {
+
+constexpr std::array<InverseStrategy, 4> kStrategies = {
+    InverseStrategy::kCholeskyWithFallback, InverseStrategy::kSvd,
+    InverseStrategy::kCompleteOrthogonal, InverseStrategy::kDampedLeastSquares};
+
+template <int N, int P>
+ConstraintSolver<N, P> solver_for(InverseStrategy s, double rank_tolerance = -1, double damping = 0) {
+  SolverOptions<double> o;
+  o.strategy = s;
+  o.rank_tolerance = rank_tolerance;
+  o.damping = damping;
+  return ConstraintSolver<N, P>(o);
+}
+
+template <int N, int P>
+void expect_all_finite(const ConstraintSolution<N, P>& s) {
+  EXPECT_TRUE(s.acceleration.allFinite());
+  EXPECT_TRUE(s.constraint_force.allFinite());
+  EXPECT_TRUE(s.force_from_impressed.allFinite());
+  EXPECT_TRUE(s.force_from_rhs.allFinite());
+  EXPECT_TRUE(s.unconstrained_acceleration.allFinite());
+}
+
+template <int N, int P>
+void expect_all_zero(const ConstraintSolution<N, P>& s) {
+  EXPECT_TRUE(s.acceleration.isZero(0));
+  EXPECT_TRUE(s.constraint_force.isZero(0));
+  EXPECT_TRUE(s.force_from_impressed.isZero(0));
+  EXPECT_TRUE(s.force_from_rhs.isZero(0));
+  EXPECT_TRUE(s.unconstrained_acceleration.isZero(0));
+}
+
+// Expectation: adding a duplicate or a linear combination of rows (with the matching g) changes
+// nothing: same q'' and Q' as the 3 independent rows, rank 3 reported, kRankDeficient set,
+// the constraints still met.
+TEST(HardCases, RedundantRowsGiveTheSameMotion) {
+  RandomSource<double> rng(1);
+  for (InverseStrategy s : kStrategies) {
+    auto base = solver_for<6, 3>(InverseStrategy::kSvd);
+    auto redundant = solver_for<6, 5>(s);
+    ConstraintSolution<6, 3> ref;
+    ConstraintSolution<6, 5> sol;
+    for (int it = 0; it < 100; ++it) {
+      const auto sys = rng.system<6, 3>();
+      Eigen::Matrix<double, 5, 6> D;
+      Eigen::Matrix<double, 5, 1> g;
+      D << sys.D, sys.D.row(1), 0.3 * sys.D.row(0) - 2.0 * sys.D.row(2);
+      g << sys.g, sys.g(1), 0.3 * sys.g(0) - 2.0 * sys.g(2);
+      ASSERT_EQ(base.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, ref), Status::kOk);
+      ASSERT_EQ(redundant.solve(sys.A, sys.f, sys.Q, D, g, sol), Status::kOk) << to_string(s);
+      const double scale = inf_norm(ref.constraint_force) + inf_norm(sys.Q - sys.f);
+      EXPECT_TRUE(near(sol.constraint_force, ref.constraint_force, 1e-9, scale, to_string(s)));
+      EXPECT_TRUE(near(sol.acceleration, ref.acceleration, 1e-9, inf_norm(ref.acceleration) + 1, to_string(s)));
+      if (s != InverseStrategy::kDampedLeastSquares || sol.diagnostics.has(warning::kFellBackToSvd)) {
+        EXPECT_EQ(sol.diagnostics.rank, 3) << to_string(s);
+        EXPECT_TRUE(sol.diagnostics.has(warning::kRankDeficient)) << to_string(s);
+      }
+      EXPECT_FALSE(sol.diagnostics.has(warning::kConstraintsNotMet)) << to_string(s);
+      if (s == InverseStrategy::kCholeskyWithFallback) {
+        EXPECT_TRUE(sol.diagnostics.has(warning::kFellBackToSvd));
+      }
+    }
+  }
+}
+
+// Expectation: two copies of a row asking for different g are met in the least-squares sense:
+// the same motion as one copy with the mean right side, kConstraintsNotMet set, and the residual
+// ||D q'' - g|| = |g1 - g2| / sqrt(2).
+TEST(HardCases, InconsistentRowsAreMetInLeastSquares) {
+  RandomSource<double> rng(2);
+  for (InverseStrategy s : kStrategies) {
+    if (s == InverseStrategy::kDampedLeastSquares) continue;  // lambda = 0 falls back to SVD anyway
+    auto base = solver_for<6, 3>(InverseStrategy::kSvd);
+    auto conflicting = solver_for<6, 4>(s);
+    ConstraintSolution<6, 3> ref;
+    ConstraintSolution<6, 4> sol;
+    for (int it = 0; it < 100; ++it) {
+      auto sys = rng.system<6, 3>();
+      const double g1 = sys.g(0), g2 = g1 + rng.uniform(0.5, 2);
+      Eigen::Matrix<double, 4, 6> D;
+      Eigen::Matrix<double, 4, 1> g;
+      D << sys.D, sys.D.row(0);
+      g << sys.g, g2;
+      sys.g(0) = 0.5 * (g1 + g2);
+      ASSERT_EQ(base.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, ref), Status::kOk);
+      ASSERT_EQ(conflicting.solve(sys.A, sys.f, sys.Q, D, g, sol), Status::kOk);
+      EXPECT_TRUE(near(sol.acceleration, ref.acceleration, 1e-9, inf_norm(ref.acceleration) + 1, to_string(s)));
+      EXPECT_TRUE(sol.diagnostics.has(warning::kConstraintsNotMet)) << to_string(s);
+      EXPECT_NEAR(sol.diagnostics.residual_norm, std::abs(g2 - g1) / std::sqrt(2.0), 1e-9);
+    }
+  }
+}
+
+// D A^(-1/2) with singular values (1, 1e-7, 1e-14). Expectation: the rank is what the tolerance
+// says; with the default (6 eps ~ 1.3e-15) all three count and the 1e-14 direction is met with a
+// large but finite force, flagged ill-conditioned; with tolerance 1e-10 the rank is 2, the force
+// stays of the size |g| / 1e-7 and only the dropped direction is unmet.
+TEST(HardCases, NearlySingularConstraintsFollowTheRankTolerance) {
+  RandomSource<double> rng(3);
+  for (InverseStrategy s : kStrategies) {
+    if (s == InverseStrategy::kDampedLeastSquares) continue;  // has its own test below
+    for (int it = 0; it < 50; ++it) {
+      const Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Identity();
+      const Eigen::Matrix<double, 3, 6> D =
+          rng.with_singular_values<3, 6>(Eigen::Vector3d(1.0, 1e-7, 1e-14));
+      const Eigen::Matrix<double, 6, 1> f = rng.matrix<6, 1>(), Q = rng.matrix<6, 1>();
+      const Eigen::Vector3d g = rng.matrix<3, 1>();
+      ConstraintSolution<6, 3> sol;
+
+      auto full = solver_for<6, 3>(s);
+      ASSERT_EQ(full.solve(A, f, Q, D, g, sol), Status::kOk);
+      expect_all_finite(sol);
+      EXPECT_EQ(sol.diagnostics.rank, 3) << to_string(s);
+      EXPECT_TRUE(sol.diagnostics.has(warning::kIllConditioned));
+      EXPECT_GT(sol.diagnostics.condition_estimate, 1e12);
+      EXPECT_FALSE(sol.diagnostics.has(warning::kConstraintsNotMet)) << to_string(s);
+
+      auto truncated = solver_for<6, 3>(s, 1e-10);
+      ASSERT_EQ(truncated.solve(A, f, Q, D, g, sol), Status::kOk);
+      expect_all_finite(sol);
+      EXPECT_EQ(sol.diagnostics.rank, 2) << to_string(s);
+      EXPECT_TRUE(sol.diagnostics.has(warning::kRankDeficient));
+      const double bound = 2.0 * (g.norm() + (D * (Q - f)).norm()) / 1e-7;
+      EXPECT_LT(sol.constraint_force.norm(), bound) << to_string(s);
+      // The kept directions are met: project the residual on the leading left singular vectors.
+      Eigen::JacobiSVD<Eigen::Matrix<double, 3, 6>> svd(D, Eigen::ComputeFullU);
+      const Eigen::Vector3d r = svd.matrixU().transpose() * (D * sol.acceleration - g);
+      EXPECT_LT(r.head<2>().norm(), 1e-6 * (1 + g.norm())) << to_string(s);
+    }
+  }
+}
+
+// Expectation: damping bounds the force near a singular configuration: |B^+ r| <= |r| / (2 lambda)
+// per direction, so |Q'| <= |L| |r| / (2 lambda); the weak constraint is given up (flagged) while
+// strong ones are met to lambda^2 / sigma^2.
+TEST(HardCases, DampingBoundsTheForceNearSingularity) {
+  RandomSource<double> rng(4);
+  const double lambda = 1e-3;
+  auto damped = solver_for<6, 3>(InverseStrategy::kDampedLeastSquares, -1, lambda);
+  ConstraintSolution<6, 3> sol;
+  for (int it = 0; it < 100; ++it) {
+    const Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Identity();
+    const Eigen::Matrix<double, 3, 6> D = rng.with_singular_values<3, 6>(Eigen::Vector3d(1.0, 0.5, 1e-9));
+    const Eigen::Matrix<double, 6, 1> f = rng.matrix<6, 1>(), Q = rng.matrix<6, 1>();
+    const Eigen::Vector3d g = rng.matrix<3, 1>();
+    ASSERT_EQ(damped.solve(A, f, Q, D, g, sol), Status::kOk);
+    expect_all_finite(sol);
+    const double r = (g - D * (Q - f)).norm();
+    EXPECT_LE(sol.constraint_force.norm(), r / (2 * lambda) * (1 + 1e-12));
+    EXPECT_TRUE(sol.diagnostics.has(warning::kConstraintsNotMet));
+    Eigen::JacobiSVD<Eigen::Matrix<double, 3, 6>> svd(D, Eigen::ComputeFullU);
+    const Eigen::Vector3d res = svd.matrixU().transpose() * (D * sol.acceleration - g);
+    EXPECT_LT(std::abs(res(0)), 2 * lambda * lambda * r);
+    EXPECT_LT(std::abs(res(1)), 2 * lambda * lambda / 0.25 * r);
+  }
+}
+
+// Mass matrices with condition numbers up to 1e10, and entries scaled from 1e-6 to 1e6.
+// Expectation: status ok, every output finite, A q'' + f = Q + Q' to 1e-8 relative,
+// D q'' = g to 1e-6 relative, and all strategies agree with SVD to 1e-6 relative.
+TEST(HardCases, IllConditionedAndBadlyScaledMassMatrices) {
+  RandomSource<double> rng(5);
+  std::array<ConstraintSolver<6, 3>, 4> solvers;
+  for (std::size_t k = 0; k < solvers.size(); ++k) solvers[k] = solver_for<6, 3>(kStrategies[k]);
+  ConstraintSolution<6, 3> ref, sol;
+  for (int it = 0; it < 200; ++it) {
+    auto sys = rng.system<6, 3>();
+    if (it % 2 == 0) {
+      sys.A = rng.spd<6>(std::pow(10.0, rng.uniform(6, 10)));
+    } else {
+      Eigen::Matrix<double, 6, 1> scale;
+      for (int i = 0; i < 6; ++i) scale(i) = std::pow(10.0, rng.uniform(-3, 3));
+      sys.A = scale.asDiagonal() * rng.spd<6>(10) * scale.asDiagonal();
+      sys.f = scale.asDiagonal() * sys.f;
+      sys.Q = scale.asDiagonal() * sys.Q;
+    }
+    ASSERT_EQ(solvers[1].solve(sys.A, sys.f, sys.Q, sys.D, sys.g, ref), Status::kOk);
+    for (std::size_t k = 0; k < solvers.size(); ++k) {
+      const char* name = to_string(kStrategies[k]);
+      ASSERT_EQ(solvers[k].solve(sys.A, sys.f, sys.Q, sys.D, sys.g, sol), Status::kOk) << name;
+      expect_all_finite(sol);
+      const Eigen::Matrix<double, 6, 1> lhs = sys.A * sol.acceleration + sys.f;
+      const Eigen::Matrix<double, 6, 1> rhs = sys.Q + sol.constraint_force;
+      EXPECT_TRUE(near(lhs, rhs, 1e-8, inf_norm(sys.A * sol.acceleration) + inf_norm(sys.f) +
+                                           inf_norm(sys.Q) + inf_norm(sol.constraint_force), name));
+      EXPECT_TRUE(near(sys.D * sol.acceleration, sys.g, 1e-6,
+                       inf_norm(sys.g) + inf_norm(sys.D) * inf_norm(sol.acceleration), name));
+      EXPECT_TRUE(near(sol.constraint_force, ref.constraint_force, 1e-6,
+                       inf_norm(ref.constraint_force) + inf_norm(sys.Q - sys.f), name));
+    }
+  }
+}
+
+// Expectation: D = 0 constrains nothing: rank 0, Q' = 0, q'' = A^-1 (Q - f); a nonzero g cannot
+// be met and is flagged.
+TEST(HardCases, ZeroConstraintMatrix) {
+  RandomSource<double> rng(6);
+  for (InverseStrategy s : kStrategies) {
+    auto solver = solver_for<4, 2>(s);
+    ConstraintSolution<4, 2> sol;
+    const auto sys = rng.system<4, 2>();
+    const Eigen::Matrix<double, 2, 4> D = Eigen::Matrix<double, 2, 4>::Zero();
+    const Eigen::Vector4d a = sys.A.llt().solve(sys.Q - sys.f);
+    ASSERT_EQ(solver.solve(sys.A, sys.f, sys.Q, D, Eigen::Vector2d::Zero(), sol), Status::kOk);
+    EXPECT_EQ(sol.diagnostics.rank, 0) << to_string(s);
+    EXPECT_TRUE(sol.constraint_force.isZero(0)) << to_string(s);
+    EXPECT_TRUE(near(sol.acceleration, a, 1e-14, inf_norm(a), to_string(s)));
+    EXPECT_FALSE(sol.diagnostics.has(warning::kConstraintsNotMet));
+    ASSERT_EQ(solver.solve(sys.A, sys.f, sys.Q, D, sys.g, sol), Status::kOk);
+    EXPECT_TRUE(sol.diagnostics.has(warning::kConstraintsNotMet)) << to_string(s);
+    EXPECT_TRUE(sol.diagnostics.has(warning::kRankDeficient)) << to_string(s);
+    EXPECT_NEAR(sol.diagnostics.residual_norm, sys.g.norm(), 1e-14);
+    expect_all_finite(sol);
+  }
+}
+
+// Expectation: P = N - 1 leaves one degree of freedom; every strategy matches a KKT solve.
+TEST(HardCases, OneDegreeOfFreedomLeft) {
+  RandomSource<double> rng(7);
+  for (InverseStrategy s : kStrategies) {
+    auto solver = solver_for<6, 5>(s);
+    ConstraintSolution<6, 5> sol;
+    for (int it = 0; it < 200; ++it) {
+      const auto sys = rng.system<6, 5>();
+      ASSERT_EQ(solver.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, sol), Status::kOk);
+      const auto [qdd, force] = kkt_solution(sys);
+      // cond(D A^-1/2) of a random 5 x 6 D can reach 1e3, so allow 1e-9.
+      EXPECT_TRUE(near(sol.constraint_force, force, 1e-9, inf_norm(force) + inf_norm(sys.Q - sys.f), to_string(s)));
+      EXPECT_TRUE(near(sol.acceleration, qdd, 1e-9, inf_norm(qdd) + 1, to_string(s)));
+    }
+  }
+}
+
+// Expectation: NaN or Inf in any entry of any input fails with kNonFiniteInput, names the input,
+// and leaves every output exactly zero.
+TEST(HardCases, NonFiniteInputAnywhere) {
+  RandomSource<double> rng(8);
+  const auto sys = rng.system<3, 2>();
+  for (InverseStrategy s : kStrategies) {
+    auto solver = solver_for<3, 2>(s);
+    ConstraintSolution<3, 2> sol;
+    for (double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+                       -std::numeric_limits<double>::infinity()}) {
+      auto check = [&](auto mutate, std::uint32_t flag, int count) {
+        for (int i = 0; i < count; ++i) {
+          auto copy = sys;
+          mutate(copy, i);
+          ASSERT_EQ(solver.solve(copy.A, copy.f, copy.Q, copy.D, copy.g, sol), Status::kNonFiniteInput);
+          EXPECT_EQ(sol.diagnostics.non_finite_inputs, flag);
+          expect_all_zero(sol);
+          EXPECT_TRUE(solver.force_for_rhs(Eigen::Vector2d::Ones()).isZero(0));
+        }
+      };
+      check([&](auto& c, int i) { c.A(i) = bad; }, input::kMassMatrix, 9);
+      check([&](auto& c, int i) { c.f(i) = bad; }, input::kNonlinearForce, 3);
+      check([&](auto& c, int i) { c.Q(i) = bad; }, input::kAppliedForce, 3);
+      check([&](auto& c, int i) { c.D(i) = bad; }, input::kConstraintMatrix, 6);
+      check([&](auto& c, int i) { c.g(i) = bad; }, input::kConstraintRhs, 2);
+    }
+  }
+}
+
+// Expectation: an indefinite, semidefinite or zero mass matrix fails with
+// kMassMatrixNotPositiveDefinite and zero outputs.
+TEST(HardCases, MassMatrixNotPositiveDefinite) {
+  RandomSource<double> rng(9);
+  const auto sys = rng.system<3, 1>();
+  ConstraintSolver<3, 1> solver;
+  ConstraintSolution<3, 1> sol;
+  const Eigen::Matrix3d indefinite = Eigen::Vector3d(1, -1, 2).asDiagonal();
+  const Eigen::Matrix3d semidefinite = Eigen::Vector3d(1, 0, 2).asDiagonal();
+  for (const Eigen::Matrix3d& A : {indefinite, semidefinite, Eigen::Matrix3d::Zero().eval(),
+                                   Eigen::Matrix3d(-Eigen::Matrix3d::Identity())}) {
+    ASSERT_EQ(solver.solve(A, sys.f, sys.Q, sys.D, sys.g, sol), Status::kMassMatrixNotPositiveDefinite);
+    expect_all_zero(sol);
+  }
+}
+
+// Expectation: finite input at the edges of the double range never yields a non-finite output;
+// it either solves (finite) or fails with a status and zero outputs.
+TEST(HardCases, ExtremeMagnitudesNeverProduceNonFiniteOutput) {
+  RandomSource<double> rng(10);
+  for (InverseStrategy s : kStrategies) {
+    auto solver = solver_for<4, 2>(s);
+    ConstraintSolution<4, 2> sol;
+    int failures = 0;
+    for (int it = 0; it < 500; ++it) {
+      auto sys = rng.system<4, 2>();
+      const double sa = std::pow(10.0, rng.uniform(-300, 300));
+      sys.A *= sa;
+      sys.f *= std::pow(10.0, rng.uniform(-300, 300));
+      sys.Q *= std::pow(10.0, rng.uniform(-300, 300));
+      sys.D *= std::pow(10.0, rng.uniform(-300, 300));
+      sys.g *= std::pow(10.0, rng.uniform(-300, 300));
+      const Status st = solver.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, sol);
+      expect_all_finite(sol);
+      if (failed(st)) {
+        ++failures;
+        EXPECT_NE(st, Status::kNonFiniteInput);
+        expect_all_zero(sol);
+      }
+    }
+    std::printf("[%s] extreme magnitudes: %d of 500 calls reported failure\n", to_string(s), failures);
+  }
+}
+
+// float instantiation: the same answers as double within float precision.
+TEST(HardCases, FloatMatchesDouble) {
+  RandomSource<double> rng(11);
+  for (InverseStrategy s : kStrategies) {
+    SolverOptions<float> of;
+    of.strategy = s;
+    ConstraintSolver<6, 3, float> single(of);
+    auto twice = solver_for<6, 3>(InverseStrategy::kSvd);
+    ConstraintSolution<6, 3, float> sf;
+    ConstraintSolution<6, 3> sd;
+    for (int it = 0; it < 200; ++it) {
+      auto sys = rng.system<6, 3>(10.0);
+      const RandomSystem<6, 3, float> sysf{sys.A.cast<float>(), sys.f.cast<float>(), sys.Q.cast<float>(),
+                                           sys.D.cast<float>(), sys.g.cast<float>()};
+      // Solve the double problem on exactly the float data.
+      sys = {sysf.A.cast<double>(), sysf.f.cast<double>(), sysf.Q.cast<double>(), sysf.D.cast<double>(),
+             sysf.g.cast<double>()};
+      ASSERT_EQ(single.solve(sysf.A, sysf.f, sysf.Q, sysf.D, sysf.g, sf), Status::kOk);
+      ASSERT_EQ(twice.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, sd), Status::kOk);
+      EXPECT_TRUE(near(sf.constraint_force, sd.constraint_force, Tolerance<float>::kAgree,
+                       inf_norm(sd.constraint_force) + inf_norm(sys.Q - sys.f), to_string(s)));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace gausstrack::test
