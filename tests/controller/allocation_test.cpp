@@ -133,10 +133,9 @@ TEST(Allocation, SolverEveryStrategyAndSize) {
   for (InverseStrategy s : {InverseStrategy::kCholeskyWithFallback, InverseStrategy::kSvd,
                             InverseStrategy::kCompleteOrthogonal, InverseStrategy::kDampedLeastSquares}) {
     expect_solver_allocation_free(rng.system<2, 1>(), s, 1e-3);
-    expect_solver_allocation_free(rng.system<6, 3>(), s);
     expect_solver_allocation_free(rng.system<12, 6>(), s);
     // Rank-deficient: duplicated rows force the fallback and the truncated paths.
-    auto sys = rng.system<6, 3>();
+    auto sys = rng.system<12, 6>();
     sys.D.row(2) = sys.D.row(1);
     sys.g(2) = sys.g(1);
     expect_solver_allocation_free(sys, s);
@@ -145,12 +144,12 @@ TEST(Allocation, SolverEveryStrategyAndSize) {
 
 TEST(Allocation, SolverFailurePaths) {
   RandomSource<double> rng(3);
-  auto sys = rng.system<4, 2>();
+  auto sys = rng.system<2, 1>();
   sys.A(0, 0) = std::numeric_limits<double>::quiet_NaN();
-  ConstraintSolver<4, 2> solver;
-  ConstraintSolution<4, 2> sol;
+  ConstraintSolver<2, 1> solver;
+  ConstraintSolution<2, 1> sol;
   EXPECT_EQ(allocations_during([&] { solver.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, sol); }), 0);
-  sys.A = -Eigen::Matrix4d::Identity();
+  sys.A = -Eigen::Matrix2d::Identity();
   EXPECT_EQ(allocations_during([&] { solver.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, sol); }), 0);
 }
 
@@ -172,7 +171,7 @@ TEST(Allocation, ControllerOnEveryPaperSystem) {
   expect_controller_allocation_free(systems::CoupledDuffing<double>{});
   expect_controller_allocation_free(systems::Pendulum<double>{});
   expect_controller_allocation_free(systems::NonholonomicParticle<double>{});
-  expect_controller_allocation_free(systems::DuffingChain<8, 4>{});
+  expect_controller_allocation_free(systems::DuffingChain<12, 6>{});
 }
 
 }  // namespace

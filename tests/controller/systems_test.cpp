@@ -27,10 +27,11 @@ void check_holonomic_derivatives(const M& model, RandomSource<double>& rng, doub
     const V q = scale * rng.matrix<N, 1>(), qd = rng.matrix<N, 1>(), qdd = rng.matrix<N, 1>();
     const double t = rng.uniform(0, 5), h = 1e-4;
     auto e = [&](double s) { return model.constraint_error(V(q + qd * s + 0.5 * qdd * s * s), t + s); };
-    const auto first = (e(h) - e(-h)) / (2 * h);
-    const auto second = (e(h) - 2 * e(0) + e(-h)) / (h * h);
-    const auto rate = model.constraint_error_rate(q, qd, t);
-    const auto expected = model.constraint_matrix(q, t) * qdd - model.constraint_rhs(q, qd, t);
+    using R = Eigen::Matrix<double, M::kConstraints, 1>;
+    const R first = (e(h) - e(-h)) / (2 * h);
+    const R second = (e(h) - 2 * e(0) + e(-h)) / (h * h);
+    const R rate = model.constraint_error_rate(q, qd, t);
+    const R expected = model.constraint_matrix(q, t) * qdd - model.constraint_rhs(q, qd, t);
     ASSERT_TRUE(near(first, rate, 1e-6, 1 + inf_norm(rate), "e' by differences")) << "state " << it;
     ASSERT_TRUE(near(second, expected, 1e-4, 1 + inf_norm(expected), "D q'' - g by differences"))
         << "state " << it;
@@ -67,8 +68,8 @@ TEST(Systems, ParticleConstraintDerivative) {
       return p.constraint_error_rate(Eigen::Vector3d(q + qd * s + 0.5 * qdd * s * s),
                                      Eigen::Vector3d(qd + qdd * s), 0.0);
     };
-    const auto derivative = (rate(h) - rate(-h)) / (2 * h);
-    const auto expected = p.constraint_matrix(q, 0.0) * qdd - p.constraint_rhs(q, qd, 0.0);
+    const Eigen::Matrix<double, 1, 1> derivative = (rate(h) - rate(-h)) / (2 * h);
+    const Eigen::Matrix<double, 1, 1> expected = p.constraint_matrix(q, 0.0) * qdd - p.constraint_rhs(q, qd, 0.0);
     ASSERT_TRUE(near(derivative, expected, 1e-8, 1 + inf_norm(expected), "particle"));
   }
 }

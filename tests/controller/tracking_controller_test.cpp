@@ -26,12 +26,12 @@ ControllerOptions<double> stabilized(double zeta, double omega) {
 
 TEST(TrackingController, PartsAddUpToTheForce) {
   RandomSource<double> rng(1);
-  TrackingController<systems::DuffingChain<6, 3>> controller({}, stabilized(0.7, 8));
+  TrackingController<systems::DuffingChain<12, 6>> controller({}, stabilized(0.7, 8));
   decltype(controller)::Output out;
   for (int it = 0; it < test_repeat(); ++it) {
-    const auto q = rng.matrix<6, 1>(), qd = rng.matrix<6, 1>();
+    const auto q = rng.matrix<12, 1>(), qd = rng.matrix<12, 1>();
     ASSERT_EQ(controller.compute(q, qd, rng.uniform(0, 10), out), Status::kOk);
-    const Eigen::Matrix<double, 6, 1> sum = out.closed_loop + out.feedforward + out.stabilizing;
+    const Eigen::Matrix<double, 12, 1> sum = out.closed_loop + out.feedforward + out.stabilizing;
     ASSERT_TRUE(near(sum, out.force, 1e-13, 1 + inf_norm(out.force), "parts"));
     ASSERT_FALSE(out.stabilizing.isZero(0));
   }

@@ -23,8 +23,9 @@
 //   factored by LLT. Exact Moore-Penrose answer when rank(D) = P. Its rounding error grows like
 //   eps * cond(B)^2, so when LLT fails or its reciprocal condition estimate falls below
 //   `fallback_rcond` the call answers by kSvd instead and sets warning::kFellBackToSvd.
-// - kSvd: Moore-Penrose inverse by JacobiSVD of B; singular values sigma_i <= rank_tolerance *
-//   sigma_max are treated as zero.
+// - kSvd: Moore-Penrose inverse by SVD: Householder QR B^T = Q [R; 0], then two-sided Jacobi SVD
+//   of the square P x P factor R = U S V^T (the singular values of B), so B^+ = Q_1 U S^+ V^T.
+//   Singular values sigma_i <= rank_tolerance * sigma_max are treated as zero.
 // - kCompleteOrthogonal: complete orthogonal decomposition B Pi = Q [T11 0; 0 0] Z, rank decided by
 //   the same relative tolerance on the column-pivoted QR diagonal; minimum-norm solve written here
 //   with a fixed-size workspace (Eigen's COD::solve allocates a temporary even for fixed sizes).
@@ -121,6 +122,8 @@ struct ConstraintSolution {
 template <int N, int P, typename Scalar = double>
 class ConstraintSolver {
   static_assert(N >= 1 && P >= 1, "ConstraintSolver needs at least one coordinate and one row");
+  static_assert(P <= N, "more constraint rows than coordinates are necessarily redundant: "
+                        "remove rows until P <= N");
 
  public:
   using MatrixNN = Eigen::Matrix<Scalar, N, N>;
@@ -274,7 +277,9 @@ class ConstraintSolver {
 
   void factorize_svd(SolveDiagnostics<Scalar>& diag) noexcept {
     used_ = InverseStrategy::kSvd;
-    svd_.compute(bt_, Eigen::ComputeFullU | Eigen::ComputeFullV);  // B^T = U S V^T
+    householder_qr_of_bt();  // B^T = Q [R; 0]
+    MatrixPP r = qr_.template topRows<P>().template triangularView<Eigen::Upper>();
+    svd_.compute(r, Eigen::ComputeFullU | Eigen::ComputeFullV);  // R = U S V^T
     const auto& s = svd_.singularValues();
     rank_ = 0;
     if (s(0) > Scalar(0)) {
@@ -282,6 +287,20 @@ class ConstraintSolver {
       while (rank_ < P && s(rank_) > cutoff) ++rank_;
     }
     set_rank_diagnostics(diag, s(0), rank_ > 0 ? s(rank_ - 1) : Scalar(0));
+  }
+
+  // Unblocked Householder QR of B^T in place. Eigen's HouseholderQR would do the same at run
+  // time for these sizes, but compiles its blocked variant too, which dominates build time.
+  void householder_qr_of_bt() noexcept {
+    qr_ = bt_;
+    Eigen::Matrix<Scalar, P, 1> workspace;
+    for (int k = 0; k < P; ++k) {
+      Scalar beta;
+      qr_.col(k).tail(N - k).makeHouseholderInPlace(qr_tau_(k), beta);
+      qr_(k, k) = beta;
+      qr_.bottomRightCorner(N - k, P - k - 1)
+          .applyHouseholderOnTheLeft(qr_.col(k).tail(N - k - 1), qr_tau_(k), workspace.data());
+    }
   }
 
   void factorize_cod(SolveDiagnostics<Scalar>& diag) noexcept {
@@ -320,12 +339,19 @@ class ConstraintSolver {
         return;
       }
       case InverseStrategy::kSvd: {
-        // B = V S U^T, so B^+ r = sum_i u_i (v_i^T r) / s_i over the kept singular values.
-        y.setZero();
+        // B = V S U^T Q_1^T, so B^+ r = Q_1 sum_i u_i (v_i^T r) / s_i over the kept values.
+        Eigen::Matrix<Scalar, P, K> w = Eigen::Matrix<Scalar, P, K>::Zero();
         for (int i = 0; i < rank_; ++i) {
           const Eigen::Matrix<Scalar, 1, K> c =
               (svd_.matrixV().col(i).transpose() * r) / svd_.singularValues()(i);
-          y.noalias() += svd_.matrixU().col(i) * c;
+          w.noalias() += svd_.matrixU().col(i) * c;
+        }
+        y.setZero();
+        y.template topRows<P>() = w;
+        Eigen::Matrix<Scalar, K, 1> workspace;
+        for (int k = P - 1; k >= 0; --k) {  // Q = H_0 H_1 ... H_(P-1)
+          y.bottomRows(N - k).applyHouseholderOnTheLeft(qr_.col(k).tail(N - k - 1), qr_tau_(k),
+                                                        workspace.data());
         }
         return;
       }
@@ -373,7 +399,9 @@ class ConstraintSolver {
   MatrixNP bt_ = MatrixNP::Zero();  // B^T = L^-1 D^T
   MatrixPN b_ = MatrixPN::Zero();   // B, for the COD
   Eigen::LLT<MatrixPP> gram_llt_;
-  Eigen::JacobiSVD<MatrixNP> svd_;
+  MatrixNP qr_ = MatrixNP::Zero();  // B^T = Q [R; 0]: R above, reflectors below the diagonal
+  VectorP qr_tau_ = VectorP::Zero();
+  Eigen::JacobiSVD<MatrixPP, Eigen::NoQRPreconditioner> svd_;  // R = U S V^T
   Eigen::CompleteOrthogonalDecomposition<MatrixPN> cod_;
   InverseStrategy used_ = InverseStrategy::kCholeskyWithFallback;
   int rank_ = 0;

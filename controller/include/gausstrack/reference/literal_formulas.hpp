@@ -15,18 +15,23 @@ template <typename Derived>
 Eigen::Matrix<typename Derived::Scalar, Derived::ColsAtCompileTime, Derived::RowsAtCompileTime>
 pseudo_inverse(const Eigen::MatrixBase<Derived>& m, typename Derived::Scalar relative_tolerance) {
   using Scalar = typename Derived::Scalar;
-  using Plain = typename Derived::PlainObject;
-  Eigen::JacobiSVD<Plain> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  constexpr int R = Derived::RowsAtCompileTime, C = Derived::ColsAtCompileTime;
+  constexpr int S = R > C ? R : C;
+  // m padded with zero rows or columns to a square S x S matrix has m's singular values (and
+  // zeros); its pseudo-inverse holds m^+ in the matching block.
+  Eigen::Matrix<Scalar, S, S> square = Eigen::Matrix<Scalar, S, S>::Zero();
+  square.template topLeftCorner<R, C>() = m;
+  Eigen::JacobiSVD<Eigen::Matrix<Scalar, S, S>, Eigen::NoQRPreconditioner> svd(
+      square, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const auto& s = svd.singularValues();
-  Eigen::Matrix<Scalar, Derived::ColsAtCompileTime, Derived::RowsAtCompileTime> inv =
-      Eigen::Matrix<Scalar, Derived::ColsAtCompileTime, Derived::RowsAtCompileTime>::Zero(
-          m.cols(), m.rows());
-  if (s.size() == 0 || !(s(0) > Scalar(0))) return inv;
-  for (Eigen::Index i = 0; i < s.size(); ++i) {
-    if (s(i) > relative_tolerance * s(0))
-      inv += svd.matrixV().col(i) * svd.matrixU().col(i).transpose() / s(i);
+  Eigen::Matrix<Scalar, S, S> inv = Eigen::Matrix<Scalar, S, S>::Zero();
+  if (s(0) > Scalar(0)) {
+    for (int i = 0; i < S; ++i) {
+      if (s(i) > relative_tolerance * s(0))
+        inv += svd.matrixV().col(i) * svd.matrixU().col(i).transpose() / s(i);
+    }
   }
-  return inv;
+  return inv.template topLeftCorner<C, R>();
 }
 
 template <int N, typename Scalar>
