@@ -1,0 +1,441 @@
+#include "gausstrack/plant_sim/scene.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <initializer_list>
+#include <memory>
+#include <set>
+#include <sstream>
+
+namespace gausstrack::plant_sim {
+
+const char* to_string(EffectKind kind) noexcept {
+  switch (kind) {
+    case EffectKind::kGravity: return "gravity";
+    case EffectKind::kSpring: return "spring";
+    case EffectKind::kCubicSpring: return "cubic_spring";
+    case EffectKind::kDamper: return "damper";
+    case EffectKind::kDisturbance: return "disturbance";
+    case EffectKind::kActuatorSaturation: return "actuator_saturation";
+    case EffectKind::kSensorNoise: return "sensor_noise";
+    case EffectKind::kCount: break;
+  }
+  return "unknown";
+}
+
+namespace {
+
+// Walks a YAML mapping with its dotted path, so that every error names file, line and key.
+class Reader {
+ public:
+  Reader(YAML::Node node, std::string path, std::shared_ptr<const std::string> file,
+         std::shared_ptr<const std::set<std::string>> overridden)
+      : node_(std::move(node)), path_(std::move(path)), file_(std::move(file)),
+        overridden_(std::move(overridden)) {}
+
+  [[noreturn]] void fail(const std::string& message) const { fail_at(node_, path_, message); }
+
+  [[noreturn]] void fail_at(const YAML::Node& where, const std::string& path,
+                            const std::string& message) const {
+    std::ostringstream out;
+    out << *file_;
+    if (overridden_->count(path)) {
+      out << ": --set " << path;
+    } else {
+      out << ":" << (where.Mark().line + 1);
+      if (!path.empty()) out << ": " << path;
+    }
+    out << ": " << message;
+    throw SceneError(out.str());
+  }
+
+  std::string key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+  void require_map() const {
+    if (!node_.IsMap()) fail("must be a mapping of keys to values");
+  }
+
+  // Unknown keys are errors: a misspelt key must not be silently ignored.
+  void allow_only(std::initializer_list<const char*> keys) const {
+    require_map();
+    for (const auto& kv : node_) {
+      const std::string k = kv.first.as<std::string>();
+      if (std::none_of(keys.begin(), keys.end(), [&](const char* a) { return k == a; })) {
+        std::string allowed;
+        for (const char* a : keys) allowed += std::string(allowed.empty() ? "" : ", ") + a;
+        fail_at(kv.first, key_path(k), "unknown key (allowed here: " + allowed + ")");
+      }
+    }
+  }
+
+  bool has(const char* key) const { return node_.IsMap() && node_[key].IsDefined() && !node_[key].IsNull(); }
+
+  Reader child(const char* key) const {
+    if (!has(key)) fail("missing required key '" + std::string(key) + "'");
+    return Reader(node_[key], key_path(key), file_, overridden_);
+  }
+
+  double number(const char* key) const {
+    const Reader c = child(key);
+    return c.as_number();
+  }
+  double number(const char* key, double fallback) const { return has(key) ? number(key) : fallback; }
+
+  double positive(const char* key) const {
+    const double v = number(key);
+    if (!(v > 0)) child(key).fail("must be > 0 (got " + format(v) + ")");
+    return v;
+  }
+  double positive(const char* key, double fallback) const { return has(key) ? positive(key) : fallback; }
+  double non_negative(const char* key, double fallback) const {
+    if (!has(key)) return fallback;
+    const double v = number(key);
+    if (!(v >= 0)) child(key).fail("must be >= 0 (got " + format(v) + ")");
+    return v;
+  }
+
+  std::string text(const char* key) const {
+    const Reader c = child(key);
+    if (!c.node_.IsScalar()) c.fail("must be a string");
+    return c.node_.Scalar();
+  }
+  std::string text(const char* key, const std::string& fallback) const { return has(key) ? text(key) : fallback; }
+
+  double as_number() const {
+    if (!node_.IsScalar()) fail("must be a number");
+    double v = 0;
+    if (!YAML::convert<double>::decode(node_, v) || !std::isfinite(v))
+      fail("must be a finite number (got '" + node_.Scalar() + "')");
+    return v;
+  }
+
+  std::vector<Reader> items(const char* key) const {
+    const Reader c = child(key);
+    if (!c.node_.IsSequence()) c.fail("must be a list");
+    std::vector<Reader> out;
+    for (std::size_t i = 0; i < c.node_.size(); ++i)
+      out.emplace_back(c.node_[i], c.path_ + "[" + std::to_string(i) + "]", file_, overridden_);
+    return out;
+  }
+
+  const YAML::Node& node() const { return node_; }
+  const std::string& path() const { return path_; }
+
+  static std::string format(double v) {
+    std::ostringstream o;
+    o << v;
+    return o.str();
+  }
+
+ private:
+  YAML::Node node_;
+  std::string path_;
+  std::shared_ptr<const std::string> file_;
+  std::shared_ptr<const std::set<std::string>> overridden_;
+};
+
+// "a.b.2.c=value": replaces (or adds) the value at that dotted path, parsed as YAML.
+void apply_override(YAML::Node root, const std::string& assignment, const std::string& file,
+                    std::set<std::string>& overridden) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw SceneError(file + ": --set " + assignment + ": expected key=value");
+  const std::string path = assignment.substr(0, eq);
+  YAML::Node value;
+  try {
+    value = YAML::Load(assignment.substr(eq + 1));
+  } catch (const YAML::Exception& e) {
+    throw SceneError(file + ": --set " + path + ": value is not valid YAML: " + e.msg);
+  }
+  std::vector<std::string> keys;
+  std::stringstream ss(path);
+  for (std::string k; std::getline(ss, k, '.');) keys.push_back(k);
+  YAML::Node cur = root;
+  std::string shown;
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const std::string& k = keys[i];
+    const bool last = i + 1 == keys.size();
+    if (cur.IsSequence()) {
+      std::size_t idx = 0;
+      try {
+        idx = std::stoul(k);
+      } catch (...) {
+        throw SceneError(file + ": --set " + path + ": '" + k + "' must index a list");
+      }
+      if (idx >= cur.size()) throw SceneError(file + ": --set " + path + ": index " + k + " out of range");
+      if (last) {
+        cur[idx] = value;
+      } else {
+        YAML::Node next = cur[idx];
+        cur.reset(next);
+      }
+      shown += (shown.empty() ? "" : ".") + k;
+      continue;
+    }
+    if (!cur.IsMap() && cur.IsDefined() && !cur.IsNull())
+      throw SceneError(file + ": --set " + path + ": '" + shown + "' is not a mapping");
+    if (last) {
+      cur[k] = value;
+    } else {
+      YAML::Node next = cur[k];
+      cur.reset(next);
+    }
+    shown += (shown.empty() ? "" : ".") + k;
+  }
+  // Record the path as the readers spell it (list indices in brackets).
+  std::string spelled;
+  for (const std::string& k : keys) {
+    const bool index = !k.empty() && std::all_of(k.begin(), k.end(), ::isdigit);
+    spelled += index ? "[" + k + "]" : (spelled.empty() ? "" : ".") + k;
+  }
+  overridden.insert(spelled);
+}
+
+int coordinate_index(const Reader& r, const std::vector<std::string>& names, bool allow_ground) {
+  if (!r.node().IsScalar()) r.fail("must name a coordinate");
+  const std::string name = r.node().Scalar();
+  if (allow_ground && name == "ground") return kGround;
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it == names.end()) {
+    std::string known;
+    for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
+    r.fail("unknown coordinate '" + name + "' (coordinates: " + known + (allow_ground ? ", ground" : "") + ")");
+  }
+  return static_cast<int>(it - names.begin());
+}
+
+EffectSpec read_effect(const Reader& r, const std::vector<std::string>& names) {
+  EffectSpec e;
+  const std::string type = r.text("type");
+  auto pair = [&](const char* key) {
+    const auto ends = r.items(key);
+    if (ends.size() != 2) r.child(key).fail("must list two ends: [coordinate, coordinate or ground]");
+    e.a = coordinate_index(ends[0], names, false);
+    e.b = coordinate_index(ends[1], names, true);
+    if (e.a == e.b) r.child(key).fail("the two ends must differ");
+  };
+  if (type == "gravity") {
+    r.allow_only({"type", "coordinate", "acceleration"});
+    e.kind = EffectKind::kGravity;
+    e.a = coordinate_index(r.child("coordinate"), names, false);
+    e.value = r.number("acceleration");
+  } else if (type == "spring" || type == "cubic_spring") {
+    r.allow_only({"type", "between", "stiffness"});
+    e.kind = type == "spring" ? EffectKind::kSpring : EffectKind::kCubicSpring;
+    pair("between");
+    e.value = r.number("stiffness");
+  } else if (type == "damper") {
+    r.allow_only({"type", "between", "coefficient"});
+    e.kind = EffectKind::kDamper;
+    pair("between");
+    e.value = r.non_negative("coefficient", 0);
+  } else if (type == "disturbance") {
+    r.allow_only({"type", "coordinate", "amplitude", "frequency", "phase"});
+    e.kind = EffectKind::kDisturbance;
+    e.a = coordinate_index(r.child("coordinate"), names, false);
+    e.value = r.number("amplitude");
+    e.frequency = r.number("frequency", 0);
+    e.phase = r.number("phase", 0);
+  } else if (type == "actuator_saturation") {
+    r.allow_only({"type", "limit"});
+    e.kind = EffectKind::kActuatorSaturation;
+    e.value = r.positive("limit");
+  } else if (type == "sensor_noise") {
+    r.allow_only({"type", "std", "seed"});
+    e.kind = EffectKind::kSensorNoise;
+    e.value = r.non_negative("std", 0);
+    e.seed = static_cast<std::uint64_t>(r.non_negative("seed", 1));
+  } else {
+    r.child("type").fail("unknown effect '" + type +
+                         "' (known: gravity, spring, cubic_spring, damper, disturbance, "
+                         "actuator_saturation, sensor_noise)");
+  }
+  return e;
+}
+
+ConstraintSpec read_constraint(const Reader& r, const std::vector<std::string>& names) {
+  ConstraintSpec c;
+  const std::string type = r.text("type");
+  if (type == "pendulum_length") {
+    r.allow_only({"type", "x", "y", "length", "mu"});
+    c.kind = ConstraintKind::kPendulumLength;
+    c.coordinates = {coordinate_index(r.child("x"), names, false), coordinate_index(r.child("y"), names, false)};
+    c.length = r.positive("length");
+    c.mu = r.number("mu", 0);
+  } else if (type == "nonholonomic") {
+    r.allow_only({"type", "x", "y", "z"});
+    c.kind = ConstraintKind::kNonholonomic;
+    c.coordinates = {coordinate_index(r.child("x"), names, false), coordinate_index(r.child("y"), names, false),
+                     coordinate_index(r.child("z"), names, false)};
+  } else {
+    r.child("type").fail("unknown constraint '" + type + "' (known: pendulum_length, nonholonomic)");
+  }
+  return c;
+}
+
+Scene read_scene(const Reader& root) {
+  Scene s;
+  root.allow_only({"name", "plant", "tracking", "control", "integrator", "duration", "output_period", "compare"});
+  s.name = root.text("name", "");
+
+  const Reader plant = root.child("plant");
+  plant.allow_only({"coordinates", "masses", "initial", "effects", "constraints"});
+  for (const Reader& c : plant.items("coordinates")) {
+    if (!c.node().IsScalar() || c.node().Scalar().empty()) c.fail("must be a coordinate name");
+    const std::string n = c.node().Scalar();
+    if (n == "ground") c.fail("'ground' is reserved");
+    if (std::find(s.coordinates.begin(), s.coordinates.end(), n) != s.coordinates.end())
+      c.fail("duplicate coordinate '" + n + "'");
+    s.coordinates.push_back(n);
+  }
+  const int n = s.dof();
+  if (n < 2 || n > 3) plant.child("coordinates").fail("plants with 2 or 3 coordinates are supported (got " + std::to_string(n) + ")");
+  const auto masses = plant.items("masses");
+  if (static_cast<int>(masses.size()) != n)
+    plant.child("masses").fail("needs one mass per coordinate (" + std::to_string(n) + "), got " + std::to_string(masses.size()));
+  for (const Reader& m : masses) {
+    const double v = m.as_number();
+    if (!(v > 0)) m.fail("mass must be > 0 (got " + Reader::format(v) + ")");
+    s.masses.push_back(v);
+  }
+  const Reader initial = plant.child("initial");
+  initial.require_map();
+  for (const auto& kv : initial.node()) {
+    const std::string k = kv.first.as<std::string>();
+    bool ok = false;
+    for (int i = 1; i <= n; ++i) ok = ok || k == "q" + std::to_string(i) || k == "qd" + std::to_string(i);
+    if (!ok) initial.fail_at(kv.first, initial.key_path(k), "unknown key (expected q1..q" + std::to_string(n) + ", qd1..qd" + std::to_string(n) + ")");
+  }
+  for (int i = 1; i <= n; ++i) {
+    s.q0.push_back(initial.number(("q" + std::to_string(i)).c_str(), 0.0));
+    s.qd0.push_back(initial.number(("qd" + std::to_string(i)).c_str(), 0.0));
+  }
+  if (plant.has("effects"))
+    for (const Reader& e : plant.items("effects")) s.effects.push_back(read_effect(e, s.coordinates));
+  if (plant.has("constraints"))
+    for (const Reader& c : plant.items("constraints")) {
+      s.constraints.push_back(read_constraint(c, s.coordinates));
+      if (s.constraints.back().kind == ConstraintKind::kNonholonomic && n != 3)
+        c.fail("the nonholonomic constraint needs 3 coordinates");
+    }
+  if (s.constraints.size() > 1) plant.child("constraints").fail("at most one physical constraint is supported");
+
+  if (root.has("tracking")) {
+    const Reader t = root.child("tracking");
+    t.allow_only({"model", "parameters", "trajectory", "stabilization", "strategy"});
+    TrackingSpec& tr = s.tracking;
+    tr.enabled = true;
+    tr.model = t.text("model");
+    if (tr.model != "coupled_duffing") t.child("model").fail("unknown controller model '" + tr.model + "' (known: coupled_duffing)");
+    if (n != 2) t.child("model").fail("coupled_duffing needs a plant with 2 coordinates");
+    if (!s.constraints.empty()) t.fail("tracking control of a plant with physical constraints is not supported");
+    if (t.has("parameters")) {
+      const Reader p = t.child("parameters");
+      p.allow_only({"m1", "m2", "k1", "k2", "kb1", "kb2", "c1", "c2"});
+      tr.m1 = p.positive("m1", tr.m1);
+      tr.m2 = p.positive("m2", tr.m2);
+      tr.k1 = p.number("k1", tr.k1);
+      tr.k2 = p.number("k2", tr.k2);
+      tr.kb1 = p.number("kb1", tr.kb1);
+      tr.kb2 = p.number("kb2", tr.kb2);
+      tr.c1 = p.number("c1", tr.c1);
+      tr.c2 = p.number("c2", tr.c2);
+    }
+    const Reader tj = t.child("trajectory");
+    tj.allow_only({"amplitude", "alpha", "omega"});
+    tr.amplitude = tj.number("amplitude");
+    tr.alpha = tj.number("alpha");
+    tr.omega = tj.number("omega");
+    if (t.has("stabilization")) {
+      const Reader st = t.child("stabilization");
+      st.allow_only({"zeta", "omega"});
+      tr.zeta = st.non_negative("zeta", 1.0);
+      tr.stabilization_omega = st.non_negative("omega", 0.0);
+    }
+    tr.strategy = t.text("strategy", "cholesky");
+    if (tr.strategy != "cholesky" && tr.strategy != "svd" && tr.strategy != "cod" && tr.strategy != "damped")
+      t.child("strategy").fail("unknown strategy '" + tr.strategy + "' (known: cholesky, svd, cod, damped)");
+  }
+
+  if (root.has("control")) {
+    const Reader c = root.child("control");
+    c.allow_only({"mode", "rate"});
+    const std::string mode = c.text("mode", "continuous");
+    if (mode == "continuous") {
+      s.control_mode = ControlMode::kContinuous;
+    } else if (mode == "sampled") {
+      s.control_mode = ControlMode::kSampled;
+      s.control_rate = c.positive("rate");
+    } else {
+      c.child("mode").fail("unknown control mode '" + mode + "' (known: continuous, sampled)");
+    }
+  }
+  for (const EffectSpec& e : s.effects)
+    if (e.kind == EffectKind::kSensorNoise && s.control_mode != ControlMode::kSampled)
+      plant.child("effects").fail("sensor_noise needs control.mode: sampled (noise inside an adaptive integrator is not defined)");
+
+  const Reader integ = root.child("integrator");
+  integ.allow_only({"method", "tolerance", "step"});
+  const std::string method = integ.text("method");
+  if (method == "rk4") {
+    s.method = Method::kRk4;
+    s.step = integ.positive("step");
+  } else if (method == "dopri5" || method == "rkf78") {
+    s.method = method == "dopri5" ? Method::kDopri5 : Method::kRkf78;
+    s.tolerance = integ.positive("tolerance");
+  } else {
+    integ.child("method").fail("unknown integrator '" + method + "' (known: rk4, dopri5, rkf78)");
+  }
+
+  s.duration = root.positive("duration");
+  s.output_period = root.positive("output_period");
+  if (s.output_period > s.duration) root.child("output_period").fail("must not exceed duration");
+  if (s.method == Method::kRk4) {
+    const double ratio = s.output_period / s.step;
+    if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio)
+      root.child("output_period").fail("must be a whole number of rk4 steps (step " + Reader::format(s.step) + ")");
+  }
+  if (s.control_mode == ControlMode::kSampled && s.method == Method::kRk4) {
+    const double ratio = 1.0 / (s.control_rate * s.step);
+    if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio)
+      root.child("control").fail("the control period must be a whole number of rk4 steps");
+  }
+  if (root.has("compare")) {
+    const std::string cmp = root.text("compare");
+    if (cmp != "angle_model") root.child("compare").fail("unknown comparison '" + cmp + "' (known: angle_model)");
+    if (s.constraints.empty() || s.constraints[0].kind != ConstraintKind::kPendulumLength || s.constraints[0].mu != 0.0)
+      root.child("compare").fail("angle_model compares a constant-length pendulum (pendulum_length with mu 0)");
+    s.compare_angle_model = true;
+  }
+  return s;
+}
+
+}  // namespace
+
+Scene parse_scene(const std::string& yaml_text, const std::string& name, const std::vector<std::string>& overrides) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw SceneError(name + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
+  }
+  if (!root.IsMap()) throw SceneError(name + ":1: a scene must be a mapping of keys to values");
+  auto overridden = std::make_shared<std::set<std::string>>();
+  for (const std::string& o : overrides) apply_override(root, o, name, *overridden);
+  Scene s = read_scene(Reader(root, "", std::make_shared<const std::string>(name), overridden));
+  s.file = name;
+  return s;
+}
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
+  std::ifstream in(path);
+  if (!in) throw SceneError(path + ": cannot open scene file");
+  std::stringstream text;
+  text << in.rdbuf();
+  return parse_scene(text.str(), path, overrides);
+}
+
+}  // namespace gausstrack::plant_sim

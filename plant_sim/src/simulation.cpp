@@ -1,0 +1,418 @@
+#include "gausstrack/plant_sim/simulation.hpp"
+
+#include <Eigen/Core>
+#include <boost/numeric/odeint.hpp>
+#include <boost/numeric/odeint/external/eigen/eigen.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <numbers>
+#include <optional>
+#include <random>
+#include <stdexcept>
+
+#include "gausstrack/constraint_solver.hpp"
+#include "gausstrack/systems/coupled_duffing.hpp"
+#include "gausstrack/tracking_controller.hpp"
+
+namespace gausstrack::plant_sim {
+namespace {
+
+namespace odeint = boost::numeric::odeint;
+
+// The plant assembled from exactly the scene's effects and physical constraint. Its physics is
+// written here from the scene's description, independently of controller/.../systems.
+template <int N>
+class Plant {
+ public:
+  using V = Eigen::Matrix<double, N, 1>;
+
+  explicit Plant(const Scene& s) : scene_(s) {
+    for (int i = 0; i < N; ++i) mass_(i) = s.masses[static_cast<std::size_t>(i)];
+    for (const EffectSpec& e : s.effects) {
+      switch (e.kind) {
+        case EffectKind::kActuatorSaturation: saturation_ = e; break;
+        case EffectKind::kSensorNoise:
+          noise_ = e;
+          rng_.seed(e.seed);
+          break;
+        default: forces_.push_back(e);
+      }
+    }
+    if (!s.constraints.empty()) constraint_ = s.constraints.front();
+  }
+
+  // Generalized impressed force Q(q, q', t) from the force effects listed, and nothing else.
+  V applied_force(const V& q, const V& qd, double t, RunSummary& stats) const {
+    V Q = V::Zero();
+    for (const EffectSpec& e : forces_) {
+      ++stats.effect_evaluations[static_cast<std::size_t>(e.kind)];
+      const double xb = e.b == kGround ? 0.0 : q(e.b), vb = e.b == kGround ? 0.0 : qd(e.b);
+      const double d = q(e.a) - xb, dd = qd(e.a) - vb;
+      double force_on_a = 0;  // force on coordinate a; b receives the opposite
+      switch (e.kind) {
+        case EffectKind::kGravity: Q(e.a) += mass_(e.a) * e.value; continue;
+        case EffectKind::kDisturbance: Q(e.a) += e.value * std::sin(e.frequency * t + e.phase); continue;
+        case EffectKind::kSpring: force_on_a = -e.value * d; break;
+        case EffectKind::kCubicSpring: force_on_a = -e.value * d * d * d; break;
+        case EffectKind::kDamper: force_on_a = -e.value * dd; break;
+        default: continue;
+      }
+      Q(e.a) += force_on_a;
+      if (e.b != kGround) Q(e.b) -= force_on_a;
+    }
+    return Q;
+  }
+
+  V saturate(const V& u, RunSummary& stats) const {
+    if (!saturation_) return u;
+    ++stats.effect_evaluations[static_cast<std::size_t>(EffectKind::kActuatorSaturation)];
+    return u.cwiseMax(-saturation_->value).cwiseMin(saturation_->value);
+  }
+
+  // The state the controller measures: exact, or with the listed sensor noise.
+  void measure(V& q, V& qd, RunSummary& stats) {
+    if (!noise_) return;
+    ++stats.effect_evaluations[static_cast<std::size_t>(EffectKind::kSensorNoise)];
+    std::normal_distribution<double> n(0.0, noise_->value);
+    for (int i = 0; i < N; ++i) {
+      q(i) += n(rng_);
+      qd(i) += n(rng_);
+    }
+  }
+
+  // Eq. (31): q'' = A^-1 (Q + u) when unconstrained, else the Udwadia-Kalaba acceleration with
+  // the physical constraint D q'' = g.
+  V acceleration(const V& q, const V& qd, double t, const V& u, RunSummary& stats) {
+    const V Q = applied_force(q, qd, t, stats) + u;
+    if (!constraint_) return Q.cwiseQuotient(mass_);
+    Eigen::Matrix<double, 1, N> D = Eigen::Matrix<double, 1, N>::Zero();
+    double g = 0;
+    const auto& c = constraint_->coordinates;
+    if (constraint_->kind == ConstraintKind::kPendulumLength) {
+      // phi = x^2 + y^2 - L^2 + mu L^2 sin(x^2); D = grad phi; g = -q'^T Hess(phi) q'.
+      const double x = q(c[0]), y = q(c[1]), xd = qd(c[0]), yd = qd(c[1]);
+      const double l2mu = constraint_->length * constraint_->length * constraint_->mu;
+      D(c[0]) = 2 * x + 2 * l2mu * x * std::cos(x * x);
+      D(c[1]) = 2 * y;
+      const double hxx = 2 + 2 * l2mu * (std::cos(x * x) - 2 * x * x * std::sin(x * x));
+      g = -(hxx * xd * xd + 2 * yd * yd);
+    } else {
+      // y' - z x' = 0 differentiated: y'' - z x'' = z' x'.
+      D(c[0]) = -q(c[2]);
+      D(c[1]) = 1;
+      g = qd(c[2]) * qd(c[0]);
+    }
+    const Eigen::Matrix<double, 1, 1> gv(g);
+    solver_.solve(mass_.asDiagonal().toDenseMatrix(), V::Zero(), Q, D, gv, solution_);
+    return solution_.acceleration;  // zero (and counted by the caller) if the solve failed
+  }
+
+  double constraint_residual(const V& q, const V& qd) const {
+    if (!constraint_) return 0;
+    const auto& c = constraint_->coordinates;
+    if (constraint_->kind == ConstraintKind::kPendulumLength) {
+      const double x = q(c[0]), y = q(c[1]), L = constraint_->length;
+      return x * x + y * y - L * L * (1 - constraint_->mu * std::sin(x * x));
+    }
+    return qd(c[1]) - q(c[2]) * qd(c[0]);
+  }
+
+ private:
+  const Scene& scene_;
+  V mass_;
+  std::vector<EffectSpec> forces_;
+  std::optional<EffectSpec> saturation_, noise_;
+  std::optional<ConstraintSpec> constraint_;
+  std::mt19937_64 rng_;
+  ConstraintSolver<N, 1> solver_;
+  ConstraintSolution<N, 1> solution_;
+};
+
+InverseStrategy strategy_from(const std::string& s) {
+  if (s == "svd") return InverseStrategy::kSvd;
+  if (s == "cod") return InverseStrategy::kCompleteOrthogonal;
+  if (s == "damped") return InverseStrategy::kDampedLeastSquares;
+  return InverseStrategy::kCholeskyWithFallback;
+}
+
+using Duffing = systems::CoupledDuffing<double>;
+
+// The controller the scene asks for, or none.
+template <int N>
+struct Control {
+  std::optional<TrackingController<Duffing>> controller;
+  typename TrackingController<Duffing>::Output out;
+
+  explicit Control(const Scene& s) {
+    if constexpr (N == 2) {
+      if (!s.tracking.enabled) return;
+      const TrackingSpec& t = s.tracking;
+      Duffing m;
+      m.m1 = t.m1, m.m2 = t.m2, m.k1 = t.k1, m.k2 = t.k2, m.kb1 = t.kb1, m.kb2 = t.kb2, m.c1 = t.c1, m.c2 = t.c2;
+      m.trajectory = {t.amplitude, t.alpha, t.omega};
+      ControllerOptions<double> o;
+      o.solver.strategy = strategy_from(t.strategy);
+      o.stabilization = {t.zeta, t.stabilization_omega};
+      controller.emplace(m, o);
+    }
+  }
+
+  Eigen::Matrix<double, N, 1> force(const Eigen::Matrix<double, N, 1>& q, const Eigen::Matrix<double, N, 1>& qd,
+                                    double t, RunSummary& stats) {
+    if constexpr (N == 2) {
+      if (controller) {
+        ++stats.control_evaluations;
+        if (failed(controller->compute(q, qd, t, out))) ++stats.control_failures;
+        return out.force;  // zero on failure
+      }
+    }
+    return Eigen::Matrix<double, N, 1>::Zero();
+  }
+
+  double tracking_error(const Eigen::Matrix<double, N, 1>& q, double t) const {
+    if constexpr (N == 2) {
+      if (controller) return controller->model().constraint_error(q, t)(0);
+    }
+    return 0;
+  }
+};
+
+template <int N>
+RunResult run(const Scene& s, const RunOptions& options) {
+  using V = Eigen::Matrix<double, N, 1>;
+  using State = Eigen::Matrix<double, 2 * N, 1>;
+  const auto wall_start = std::chrono::steady_clock::now();
+
+  RunResult result;
+  RunSummary& stats = result.summary;
+  Plant<N> plant(s);
+  Control<N> control(s);
+
+  const bool sampled = s.control_mode == ControlMode::kSampled;
+  V held = V::Zero();  // the control force held over the current control period
+  auto rhs = [&](const State& x, State& dxdt, double t) {
+    ++stats.rhs_evaluations;
+    const V q = x.template head<N>(), qd = x.template tail<N>();
+    const V u = sampled ? held : plant.saturate(control.force(q, qd, t, stats), stats);
+    dxdt << qd, plant.acceleration(q, qd, t, u, stats);
+  };
+
+  State x;
+  for (int i = 0; i < N; ++i) {
+    x(i) = s.q0[static_cast<std::size_t>(i)];
+    x(N + i) = s.qd0[static_cast<std::size_t>(i)];
+  }
+
+  // Exact output times k * output_period.
+  const auto sample_count = static_cast<std::size_t>(std::floor(s.duration / s.output_period + 1e-9)) + 1;
+  std::size_t next_sample = 0;
+  auto record = [&](const State& state, double t) {
+    Sample smp;
+    smp.t = t;
+    const V q = state.template head<N>(), qd = state.template tail<N>();
+    V u = held;
+    if (!sampled) {
+      RunSummary scratch;  // recording must not count as simulation work
+      u = plant.saturate(control.force(q, qd, t, scratch), scratch);
+    }
+    smp.q.assign(q.data(), q.data() + N);
+    smp.qd.assign(qd.data(), qd.data() + N);
+    smp.u.assign(u.data(), u.data() + N);
+    smp.tracking_error = control.tracking_error(q, t);
+    smp.constraint_residual = plant.constraint_residual(q, qd);
+    stats.max_tracking_error = std::max(stats.max_tracking_error, std::abs(smp.tracking_error));
+    stats.max_constraint_residual = std::max(stats.max_constraint_residual, std::abs(smp.constraint_residual));
+    result.samples.push_back(std::move(smp));
+  };
+  auto sample_time = [&](std::size_t k) { return static_cast<double>(k) * s.output_period; };
+
+  // Segments: the whole run (continuous control) or one control period each (sampled and held).
+  const double period = sampled ? 1.0 / s.control_rate : s.duration;
+  const auto segments = static_cast<std::size_t>(std::ceil(s.duration / period - 1e-9));
+  auto last_progress = std::chrono::steady_clock::now();
+
+  using Dopri = odeint::runge_kutta_dopri5<State, double, State, double, odeint::vector_space_algebra>;
+  using Rkf78 = odeint::runge_kutta_fehlberg78<State, double, State, double, odeint::vector_space_algebra>;
+  using Rk4 = odeint::runge_kutta4<State, double, State, double, odeint::vector_space_algebra>;
+  auto dense = odeint::make_dense_output(s.tolerance, s.tolerance, Dopri());
+  auto controlled = odeint::make_controlled(s.tolerance, s.tolerance, Rkf78());
+  Rk4 rk4;
+  double dt = s.method == Method::kRk4 ? s.step : std::min(1e-3, period);
+
+  for (std::size_t k = 0; k < segments; ++k) {
+    const double t0 = static_cast<double>(k) * period;
+    const double t1 = std::min(s.duration, static_cast<double>(k + 1) * period);
+    if (sampled) {
+      V q = x.template head<N>(), qd = x.template tail<N>();
+      plant.measure(q, qd, stats);
+      held = plant.saturate(control.force(q, qd, t0, stats), stats);
+    }
+    if (next_sample == 0) {
+      record(x, 0.0);
+      next_sample = 1;
+    }
+    auto emit_until = [&](double t_reached, auto&& state_at) {
+      while (next_sample < sample_count && sample_time(next_sample) <= t_reached * (1 + 1e-14)) {
+        record(state_at(sample_time(next_sample)), sample_time(next_sample));
+        ++next_sample;
+      }
+    };
+
+    if (s.method == Method::kDopri5) {
+      // Dense output: steps are chosen by the error control alone; samples are interpolated.
+      dense.initialize(x, t0, dt);
+      while (dense.current_time() < t1 * (1 - 1e-15)) {
+        dense.do_step(rhs);
+        ++stats.steps;
+        const double reached = std::min(dense.current_time(), t1);
+        emit_until(reached, [&](double ts) {
+          State xs;
+          dense.calc_state(ts, xs);
+          return xs;
+        });
+      }
+      dt = dense.current_time_step();
+      if (dense.current_time() > t1) {
+        dense.calc_state(t1, x);
+      } else {
+        x = dense.current_state();
+      }
+    } else if (s.method == Method::kRkf78) {
+      // No dense output in odeint for this method: steps are clipped to end exactly on sample
+      // and segment times (a clipped step does not shrink the step size used afterwards).
+      double t = t0;
+      for (;;) {
+        emit_until(t, [&](double) { return x; });
+        if (t >= t1 * (1 - 1e-15)) break;
+        double stop = t1;
+        if (next_sample < sample_count) stop = std::min(stop, sample_time(next_sample));
+        const bool clipped = stop - t < dt;
+        double h = clipped ? stop - t : dt;
+        if (controlled.try_step(rhs, x, t, h) == odeint::success) {
+          ++stats.steps;
+          if (clipped) {
+            t = stop;
+          } else {
+            dt = h;
+          }
+        } else {
+          dt = h;
+        }
+      }
+    } else {
+      const auto n_steps = static_cast<long>(std::llround((t1 - t0) / s.step));
+      for (long i = 0; i < n_steps; ++i) {
+        rk4.do_step(rhs, x, t0 + static_cast<double>(i) * s.step, s.step);
+        ++stats.steps;
+        emit_until(t0 + static_cast<double>(i + 1) * s.step, [&](double) { return x; });
+      }
+    }
+    if (options.on_progress) {
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last_progress > std::chrono::milliseconds(100) || k + 1 == segments) {
+        options.on_progress(t1);
+        last_progress = now;
+      }
+    }
+  }
+
+  if (s.compare_angle_model) {
+    // theta'' = -(g / L) sin(theta) with x = L sin(theta), y = L cos(theta) (y downwards).
+    double gravity = 0;
+    const auto& c = s.constraints.front().coordinates;
+    for (const EffectSpec& e : s.effects)
+      if (e.kind == EffectKind::kGravity && e.a == c[1]) gravity += e.value;
+    const double L = s.constraints.front().length;
+    using S2 = Eigen::Matrix<double, 2, 1>;
+    const double x0 = s.q0[static_cast<std::size_t>(c[0])], y0 = s.q0[static_cast<std::size_t>(c[1])];
+    const double xd0 = s.qd0[static_cast<std::size_t>(c[0])], yd0 = s.qd0[static_cast<std::size_t>(c[1])];
+    S2 th(std::atan2(x0, y0), (xd0 * y0 - yd0 * x0) / (x0 * x0 + y0 * y0));
+    auto pend = [&](const S2& z, S2& dz, double) { dz << z(1), -gravity / L * std::sin(z(0)); };
+    using D2 = odeint::runge_kutta_dopri5<S2, double, S2, double, odeint::vector_space_algebra>;
+    auto ds = odeint::make_dense_output(1e-13, 1e-13, D2());
+    ds.initialize(th, 0.0, 1e-3);
+    stats.compared_angle_model = true;
+    for (const Sample& smp : result.samples) {
+      while (ds.current_time() < smp.t) ds.do_step(pend);
+      S2 z = th;
+      if (smp.t > 0) ds.calc_state(smp.t, z);
+      const double dx = smp.q[static_cast<std::size_t>(c[0])] - L * std::sin(z(0));
+      const double dy = smp.q[static_cast<std::size_t>(c[1])] - L * std::cos(z(0));
+      stats.max_angle_model_difference = std::max(stats.max_angle_model_difference, std::hypot(dx, dy));
+      const double angle = std::atan2(smp.q[static_cast<std::size_t>(c[0])], smp.q[static_cast<std::size_t>(c[1])]);
+      stats.max_angle_deg = std::max(stats.max_angle_deg, std::abs(angle) * 180.0 / std::numbers::pi);
+    }
+  }
+
+  stats.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  return result;
+}
+
+}  // namespace
+
+RunResult run_scene(const Scene& scene, const RunOptions& options) {
+  switch (scene.dof()) {
+    case 2: return run<2>(scene, options);
+    case 3: return run<3>(scene, options);
+    default: throw SceneError(scene.file + ": plants with 2 or 3 coordinates are supported");
+  }
+}
+
+void write_trajectory_csv(const Scene& scene, const RunResult& result, const std::string& path) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write " + path);
+  const int n = scene.dof();
+  out << "t";
+  for (const char* p : {"q", "qd", "u"})
+    for (int i = 1; i <= n; ++i) out << "," << p << i;
+  out << ",tracking_error,constraint_residual\n";
+  char buf[64];
+  auto put = [&](double v) {
+    std::snprintf(buf, sizeof buf, ",%.17g", v);
+    out << buf;
+  };
+  for (const Sample& s : result.samples) {
+    std::snprintf(buf, sizeof buf, "%.17g", s.t);
+    out << buf;
+    for (double v : s.q) put(v);
+    for (double v : s.qd) put(v);
+    for (double v : s.u) put(v);
+    put(s.tracking_error);
+    put(s.constraint_residual);
+    out << "\n";
+  }
+  if (!out) throw std::runtime_error("error writing " + path);
+}
+
+void write_summary_json(const Scene& scene, const RunResult& result, const std::string& path) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write " + path);
+  const RunSummary& s = result.summary;
+  char buf[128];
+  auto num = [&](const char* key, double v, bool comma = true) {
+    std::snprintf(buf, sizeof buf, "  \"%s\": %.17g%s\n", key, v, comma ? "," : "");
+    out << buf;
+  };
+  out << "{\n  \"scene\": \"" << scene.name << "\",\n";
+  num("max_tracking_error", s.max_tracking_error);
+  num("max_constraint_residual", s.max_constraint_residual);
+  num("steps", static_cast<double>(s.steps));
+  num("rhs_evaluations", static_cast<double>(s.rhs_evaluations));
+  num("control_evaluations", static_cast<double>(s.control_evaluations));
+  num("control_failures", static_cast<double>(s.control_failures));
+  if (s.compared_angle_model) {
+    num("max_angle_model_difference", s.max_angle_model_difference);
+    num("max_angle_deg", s.max_angle_deg);
+  }
+  out << "  \"effect_evaluations\": {";
+  for (std::size_t k = 0; k < s.effect_evaluations.size(); ++k)
+    out << (k ? ", " : "") << "\"" << to_string(static_cast<EffectKind>(k)) << "\": " << s.effect_evaluations[k];
+  out << "},\n";
+  num("wall_time_s", s.wall_time_s, false);
+  out << "}\n";
+  if (!out) throw std::runtime_error("error writing " + path);
+}
+
+}  // namespace gausstrack::plant_sim
