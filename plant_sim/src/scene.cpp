@@ -165,8 +165,12 @@ void apply_override(YAML::Node root, const std::string& assignment, const std::s
       } catch (...) {
         throw SceneError(file + ": --set " + path + ": '" + k + "' must index a list");
       }
-      if (idx >= cur.size()) throw SceneError(file + ": --set " + path + ": index " + k + " out of range");
-      if (last) {
+      // An index one past the end appends (e.g. adds an effect to the list).
+      if (idx > cur.size() || (idx == cur.size() && !last))
+        throw SceneError(file + ": --set " + path + ": index " + k + " out of range");
+      if (last && idx == cur.size()) {
+        cur.push_back(value);
+      } else if (last) {
         cur[idx] = value;
       } else {
         YAML::Node next = cur[idx];
@@ -373,9 +377,9 @@ Scene read_scene(const Reader& root) {
       c.child("mode").fail("unknown control mode '" + mode + "' (known: continuous, sampled)");
     }
   }
-  for (const EffectSpec& e : s.effects)
-    if (e.kind == EffectKind::kSensorNoise && s.control_mode != ControlMode::kSampled)
-      plant.child("effects").fail("sensor_noise needs control.mode: sampled (noise inside an adaptive integrator is not defined)");
+  for (std::size_t i = 0; i < s.effects.size(); ++i)
+    if (s.effects[i].kind == EffectKind::kSensorNoise && s.control_mode != ControlMode::kSampled)
+      plant.items("effects")[i].fail("sensor_noise needs control.mode: sampled (noise inside an adaptive integrator is not defined)");
 
   const Reader integ = root.child("integrator");
   integ.allow_only({"method", "tolerance", "step"});

@@ -350,7 +350,35 @@ RunResult run(const Scene& s, const RunOptions& options) {
   return result;
 }
 
+template <int N>
+Eigen::Matrix<double, N, 1> to_vector(const std::vector<double>& v, const Scene& s) {
+  if (static_cast<int>(v.size()) != N)
+    throw std::invalid_argument(s.file + ": expected " + std::to_string(N) + " values, got " + std::to_string(v.size()));
+  return Eigen::Map<const Eigen::Matrix<double, N, 1>>(v.data());
+}
+
+template <int N>
+std::vector<double> evaluate(const Scene& s, const std::vector<double>& q, const std::vector<double>& qd, double t,
+                             const std::vector<double>* u) {
+  Plant<N> plant(s);
+  RunSummary stats;
+  const Eigen::Matrix<double, N, 1> r =
+      u ? plant.acceleration(to_vector<N>(q, s), to_vector<N>(qd, s), t, to_vector<N>(*u, s), stats)
+        : plant.applied_force(to_vector<N>(q, s), to_vector<N>(qd, s), t, stats);
+  return {r.data(), r.data() + N};
+}
+
 }  // namespace
+
+std::vector<double> plant_applied_force(const Scene& scene, const std::vector<double>& q,
+                                        const std::vector<double>& qd, double t) {
+  return scene.dof() == 2 ? evaluate<2>(scene, q, qd, t, nullptr) : evaluate<3>(scene, q, qd, t, nullptr);
+}
+
+std::vector<double> plant_acceleration(const Scene& scene, const std::vector<double>& q,
+                                       const std::vector<double>& qd, double t, const std::vector<double>& u) {
+  return scene.dof() == 2 ? evaluate<2>(scene, q, qd, t, &u) : evaluate<3>(scene, q, qd, t, &u);
+}
 
 RunResult run_scene(const Scene& scene, const RunOptions& options) {
   switch (scene.dof()) {

@@ -91,7 +91,8 @@ struct Scene {
 };
 
 /// Loads and checks a scene. `overrides` are "dotted.key=value" pairs applied before checking
-/// (values are parsed as YAML). Throws SceneError naming file, line and key.
+/// (values are parsed as YAML; a list index one past the end appends). Throws SceneError naming
+/// file, line and key.
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
 
 /// The same from YAML text; `name` stands for the file in messages.

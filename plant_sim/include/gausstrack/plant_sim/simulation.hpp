@@ -50,6 +50,14 @@ struct RunOptions {
 
 RunResult run_scene(const Scene& scene, const RunOptions& options = {});
 
+/// The plant's generalized impressed force Q(q, q', t) from the scene's force effects.
+std::vector<double> plant_applied_force(const Scene& scene, const std::vector<double>& q,
+                                        const std::vector<double>& qd, double t);
+/// The plant's acceleration (eq. 31 with its physical constraint, if any) under control force u.
+std::vector<double> plant_acceleration(const Scene& scene, const std::vector<double>& q,
+                                       const std::vector<double>& qd, double t,
+                                       const std::vector<double>& u);
+
 /// `t,q1..qN,qd1..qdN,u1..uN,tracking_error,constraint_residual`, one row per sample.
 void write_trajectory_csv(const Scene& scene, const RunResult& result, const std::string& path);
 void write_summary_json(const Scene& scene, const RunResult& result, const std::string& path);

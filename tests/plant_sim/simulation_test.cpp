@@ -1,0 +1,210 @@
+// Runs the paper's scenes and holds them to what the paper reports, against closed forms and
+// independent formulations that could fail: the angle-coordinate pendulum, the minimal-coordinate
+// Duffing oscillator, eq. (38)'s invariants, and the controller's own hand-written models.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <boost/numeric/odeint.hpp>
+#include <boost/numeric/odeint/external/eigen/eigen.hpp>
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <random>
+
+#include "gausstrack/plant_sim/scene.hpp"
+#include "gausstrack/plant_sim/simulation.hpp"
+#include "gausstrack/systems/coupled_duffing.hpp"
+#include "gausstrack/systems/pendulum.hpp"
+#include "gausstrack/tracking_controller.hpp"
+
+namespace gausstrack::plant_sim {
+namespace {
+
+const std::string kScenes = GAUSSTRACK_SCENE_DIR;
+namespace odeint = boost::numeric::odeint;
+
+std::size_t kind(EffectKind k) { return static_cast<std::size_t>(k); }
+
+TEST(Simulation, DuffingTracksToThePaperAccuracyForBothAlphas) {
+  for (const char* name : {"duffing_alpha4", "duffing_alpha0.4"}) {
+    const Scene s = load_scene(kScenes + "/" + name + ".yaml");
+    const RunResult r = run_scene(s);
+    EXPECT_EQ(r.samples.size(), 1001u);
+    EXPECT_LE(r.summary.max_tracking_error, 1e-9) << name;  // the paper: 1e-9 at tolerance 1e-10
+    EXPECT_EQ(r.summary.control_failures, 0u);
+    // The force of eq. (32) is equal and opposite on the two masses.
+    for (const Sample& smp : r.samples) ASSERT_NEAR(smp.u[0], -smp.u[1], 1e-9 * (1 + std::abs(smp.u[0])));
+  }
+}
+
+// Independent formulation: with x1 = x2 + s(t), summing eq. (35a) and (35b) eliminates the
+// control force: (m1 + m2) x2'' = -(f1 + f2) - m1 s''. Integrated in x2 alone.
+TEST(Simulation, DuffingMatchesTheMinimalCoordinateModel) {
+  const Scene s = load_scene(kScenes + "/duffing_alpha0.4.yaml");
+  const RunResult r = run_scene(s);
+  systems::CoupledDuffing<double> m;
+  m.trajectory.alpha = 0.4;
+  using S2 = Eigen::Matrix<double, 2, 1>;
+  auto rhs = [&](const S2& z, S2& dz, double t) {
+    const double x2 = z(0), v2 = z(1);
+    const double x1 = x2 + m.trajectory.position(t), v1 = v2 + m.trajectory.velocity(t);
+    const double d = x1 - x2, dd = v1 - v2;
+    const double f1 = m.k1 * d + m.c1 * dd + m.kb1 * d * d * d;
+    const double f2 = m.k2 * x2 - m.k1 * d + m.c2 * v2 - m.c1 * dd + m.kb2 * x2 * x2 * x2 - m.kb1 * d * d * d;
+    dz << v2, (-(f1 + f2) - m.m1 * m.trajectory.acceleration(t)) / (m.m1 + m.m2);
+  };
+  S2 z(1.0, 2.0);
+  using D2 = odeint::runge_kutta_dopri5<S2, double, S2, double, odeint::vector_space_algebra>;
+  auto ds = odeint::make_dense_output(1e-13, 1e-13, D2());
+  ds.initialize(z, 0.0, 1e-3);
+  double worst = 0;
+  for (const Sample& smp : r.samples) {
+    while (ds.current_time() < smp.t) ds.do_step(rhs);
+    S2 zs = z;
+    if (smp.t > 0) ds.calc_state(smp.t, zs);
+    worst = std::max(worst, std::abs(smp.q[1] - zs(0)));
+    worst = std::max(worst, std::abs(smp.q[0] - zs(0) - m.trajectory.position(smp.t)));
+  }
+  EXPECT_LT(worst, 1e-7);
+  std::printf("duffing vs minimal-coordinate model: max |dx| = %.3g\n", worst);
+}
+
+TEST(Simulation, ConstantLengthPendulumEqualsTheAngleModel) {
+  const Scene s = load_scene(kScenes + "/pendulum_fig1.yaml");
+  const RunResult r = run_scene(s);
+  ASSERT_TRUE(r.summary.compared_angle_model);
+  EXPECT_LT(r.summary.max_angle_model_difference, 1e-6);  // 20 m rod: 5e-8 relative
+  EXPECT_GT(r.summary.max_angle_deg, 76.0);                // the paper: "about 80 degrees"
+  EXPECT_LT(r.summary.max_angle_deg, 80.0);
+  EXPECT_LT(r.summary.max_constraint_residual, 1e-6);      // of x^2 + y^2 - L^2 = 400
+}
+
+TEST(Simulation, NonlinearLengthPendulumKeepsItsConstraint) {
+  for (const char* a : {"0.5", "1", "2", "4"}) {
+    const Scene s = load_scene(kScenes + "/pendulum_fig2.yaml", {std::string("plant.initial.qd1=") + a});
+    const RunResult r = run_scene(s);
+    EXPECT_LT(r.summary.max_constraint_residual, 1e-4) << "a = " << a;  // of L^2 = 400
+    for (const Sample& smp : r.samples) ASSERT_TRUE(std::isfinite(smp.q[0]) && std::isfinite(smp.q[1]));
+  }
+}
+
+// Eq. (38): no force does work on the particle, so kinetic energy is constant, and z'' = 0.
+TEST(Simulation, RosenbergParticleKeepsEq38Invariants) {
+  const Scene s = load_scene(kScenes + "/rosenberg.yaml");
+  const RunResult r = run_scene(s);
+  EXPECT_LT(r.summary.max_constraint_residual, 1e-8);
+  const double e0 = 0.5 * (1.0 + 0.0 + 1.0);
+  for (const Sample& smp : r.samples) {
+    const double e = 0.5 * (smp.qd[0] * smp.qd[0] + smp.qd[1] * smp.qd[1] + smp.qd[2] * smp.qd[2]);
+    ASSERT_NEAR(e, e0, 1e-8) << "t = " << smp.t;
+    ASSERT_NEAR(smp.qd[2], 1.0, 1e-12) << "z'' = 0";
+    ASSERT_NEAR(smp.q[2], smp.t, 1e-10) << "z = z0 + z0' t";
+  }
+}
+
+TEST(Simulation, EveryIntegratorReachesTheTrackingAccuracy) {
+  struct Case {
+    std::vector<std::string> sets;
+    double bound;
+  };
+  const Case cases[] = {{{"integrator.method=rkf78", "integrator.tolerance=1e-10"}, 1e-9},
+                        {{"integrator.method=rk4", "integrator.step=1e-3"}, 1e-9}};
+  for (const Case& c : cases) {
+    const Scene s = load_scene(kScenes + "/duffing_alpha4.yaml", c.sets);
+    const RunResult r = run_scene(s);
+    EXPECT_EQ(r.samples.size(), 1001u);
+    EXPECT_LE(r.summary.max_tracking_error, c.bound) << c.sets[0];
+    EXPECT_NEAR(r.samples.back().t, 10.0, 1e-12);
+  }
+}
+
+// Sampled and held control drifts off the trajectory; stabilization pulls it back.
+TEST(Simulation, SampledControlNeedsStabilization) {
+  const std::vector<std::string> sampled = {"control.mode=sampled", "control.rate=100"};
+  const RunResult plain = run_scene(load_scene(kScenes + "/duffing_alpha4.yaml", sampled));
+  auto with = sampled;
+  with.push_back("tracking.stabilization={zeta: 1.0, omega: 20.0}");
+  const RunResult stabilized = run_scene(load_scene(kScenes + "/duffing_alpha4.yaml", with));
+  EXPECT_GT(plain.summary.max_tracking_error, 1e-3);
+  EXPECT_LT(stabilized.summary.max_tracking_error, 0.5 * plain.summary.max_tracking_error);
+  EXPECT_LT(std::abs(stabilized.samples.back().tracking_error), 1e-3);
+  EXPECT_EQ(stabilized.summary.control_evaluations, 1000u);
+}
+
+TEST(Simulation, UnlistedEffectsAreNeverEvaluated) {
+  const RunResult pend = run_scene(load_scene(kScenes + "/pendulum_fig1.yaml"));
+  for (std::size_t k = 0; k < pend.summary.effect_evaluations.size(); ++k) {
+    if (k == kind(EffectKind::kGravity)) {
+      EXPECT_EQ(pend.summary.effect_evaluations[k], pend.summary.rhs_evaluations);
+    } else {
+      EXPECT_EQ(pend.summary.effect_evaluations[k], 0u) << to_string(static_cast<EffectKind>(k));
+    }
+  }
+  const RunResult duff = run_scene(load_scene(kScenes + "/duffing_alpha4.yaml"));
+  EXPECT_EQ(duff.summary.effect_evaluations[kind(EffectKind::kGravity)], 0u);
+  EXPECT_EQ(duff.summary.effect_evaluations[kind(EffectKind::kSpring)], 2 * duff.summary.rhs_evaluations);
+  EXPECT_EQ(duff.summary.effect_evaluations[kind(EffectKind::kSensorNoise)], 0u);
+  EXPECT_EQ(duff.summary.effect_evaluations[kind(EffectKind::kActuatorSaturation)], 0u);
+}
+
+TEST(Simulation, SaturationClampsTheAppliedForce) {
+  const RunResult r = run_scene(load_scene(kScenes + "/duffing_alpha4.yaml",
+                                           {"plant.effects.6={type: actuator_saturation, limit: 20.0}"}));
+  double peak = 0;
+  for (const Sample& smp : r.samples) peak = std::max({peak, std::abs(smp.u[0]), std::abs(smp.u[1])});
+  EXPECT_LE(peak, 20.0);
+  EXPECT_GT(r.summary.max_tracking_error, 1e-6);  // the unsaturated law needs 42 N at t = 0
+}
+
+// The plant's forces come from its effects; the controller's CoupledDuffing is a separate,
+// hand-written model of the same physics: Q_plant = -f_model at any state.
+TEST(Simulation, PlantEffectsAgreeWithTheControllerModels) {
+  const Scene s = load_scene(kScenes + "/duffing_alpha4.yaml");
+  systems::CoupledDuffing<double> m;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-3, 3);
+  for (int it = 0; it < 200; ++it) {
+    const std::vector<double> q = {u(rng), u(rng)}, qd = {u(rng), u(rng)};
+    const auto Q = plant_applied_force(s, q, qd, 0.0);
+    const Eigen::Vector2d f = m.nonlinear_force(Eigen::Vector2d(q[0], q[1]), Eigen::Vector2d(qd[0], qd[1]), 0.0);
+    ASSERT_NEAR(Q[0], -f(0), 1e-12 * (1 + std::abs(f(0))));
+    ASSERT_NEAR(Q[1], -f(1), 1e-12 * (1 + std::abs(f(1))));
+  }
+  // The pendulum plant's constrained acceleration against the controller's Pendulum model.
+  for (double mu : {0.0, -0.1}) {
+    const Scene p = load_scene(kScenes + "/pendulum_fig2.yaml", {"plant.constraints.0.mu=" + std::to_string(mu)});
+    systems::Pendulum<double> model;
+    model.mu = mu;
+    TrackingController<systems::Pendulum<double>> c(model);
+    TrackingController<systems::Pendulum<double>>::Output out;
+    for (int it = 0; it < 200; ++it) {
+      const std::vector<double> q = {u(rng), 20 + u(rng)}, qd = {u(rng), u(rng)};
+      const auto acc = plant_acceleration(p, q, qd, 0.0, {0.0, 0.0});
+      ASSERT_EQ(c.compute(Eigen::Vector2d(q[0], q[1]), Eigen::Vector2d(qd[0], qd[1]), 0.0, out), Status::kOk);
+      ASSERT_NEAR(acc[0], out.acceleration(0), 1e-9 * (1 + std::abs(acc[0])));
+      ASSERT_NEAR(acc[1], out.acceleration(1), 1e-9 * (1 + std::abs(acc[1])));
+    }
+  }
+}
+
+TEST(Simulation, OutputFilesHaveTheDocumentedColumns) {
+  const Scene s = load_scene(kScenes + "/rosenberg.yaml", {"duration=0.1"});
+  const RunResult r = run_scene(s);
+  const std::string dir = ::testing::TempDir();
+  write_trajectory_csv(s, r, dir + "/trajectory.csv");
+  write_summary_json(s, r, dir + "/summary.json");
+  std::ifstream csv(dir + "/trajectory.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "t,q1,q2,q3,qd1,qd2,qd3,u1,u2,u3,tracking_error,constraint_residual");
+  int rows = 0;
+  for (std::string line; std::getline(csv, line);) ++rows;
+  EXPECT_EQ(rows, 11);
+  std::ifstream json(dir + "/summary.json");
+  const std::string text((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
+  for (const char* key : {"max_tracking_error", "max_constraint_residual", "steps", "rhs_evaluations", "wall_time_s"})
+    EXPECT_NE(text.find(std::string("\"") + key + "\":"), std::string::npos) << key;
+}
+
+}  // namespace
+}  // namespace gausstrack::plant_sim
