@@ -131,6 +131,18 @@ TEST(Simulation, SampledControlNeedsStabilization) {
   EXPECT_EQ(stabilized.summary.control_evaluations, 1000u);
 }
 
+// A controller whose model is wrong (k1 10% high) no longer keeps the trajectory: the model error
+// acts as an unmodelled force and e'' != 0. Stabilization turns the drift into a small bounded error.
+TEST(Simulation, ModelMismatchDriftsAndStabilizationBoundsIt) {
+  const std::string scene = kScenes + "/duffing_alpha0.4.yaml";
+  const RunResult exact = run_scene(load_scene(scene));
+  const RunResult wrong = run_scene(load_scene(scene, {"tracking.parameters.k1=11.0"}));
+  const RunResult held = run_scene(load_scene(
+      scene, {"tracking.parameters.k1=11.0", "tracking.stabilization={zeta: 1.0, omega: 10.0}"}));
+  EXPECT_GT(wrong.summary.max_tracking_error, 1e3 * exact.summary.max_tracking_error);
+  EXPECT_LT(held.summary.max_tracking_error, 0.1 * wrong.summary.max_tracking_error);
+}
+
 TEST(Simulation, UnlistedEffectsAreNeverEvaluated) {
   const RunResult pend = run_scene(load_scene(kScenes + "/pendulum_fig1.yaml"));
   for (std::size_t k = 0; k < pend.summary.effect_evaluations.size(); ++k) {
