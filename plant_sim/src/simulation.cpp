@@ -13,8 +13,7 @@
 #include <stdexcept>
 
 #include "gausstrack/constraint_solver.hpp"
-#include "gausstrack/systems/coupled_duffing.hpp"
-#include "gausstrack/tracking_controller.hpp"
+#include "gausstrack/plant_sim/scene_controller.hpp"
 
 namespace gausstrack::plant_sim {
 namespace {
@@ -130,32 +129,14 @@ class Plant {
   ConstraintSolution<N, 1> solution_;
 };
 
-InverseStrategy strategy_from(const std::string& s) {
-  if (s == "svd") return InverseStrategy::kSvd;
-  if (s == "cod") return InverseStrategy::kCompleteOrthogonal;
-  if (s == "damped") return InverseStrategy::kDampedLeastSquares;
-  return InverseStrategy::kCholeskyWithFallback;
-}
-
-using Duffing = systems::CoupledDuffing<double>;
-
-// The controller the scene asks for, or none.
 template <int N>
 struct Control {
-  std::optional<TrackingController<Duffing>> controller;
-  typename TrackingController<Duffing>::Output out;
+  std::optional<SceneController> controller;
+  SceneController::Output out;
 
   explicit Control(const Scene& s) {
     if constexpr (N == 2) {
-      if (!s.tracking.enabled) return;
-      const TrackingSpec& t = s.tracking;
-      Duffing m;
-      m.m1 = t.m1, m.m2 = t.m2, m.k1 = t.k1, m.k2 = t.k2, m.kb1 = t.kb1, m.kb2 = t.kb2, m.c1 = t.c1, m.c2 = t.c2;
-      m.trajectory = {t.amplitude, t.alpha, t.omega};
-      ControllerOptions<double> o;
-      o.solver.strategy = strategy_from(t.strategy);
-      o.stabilization = {t.zeta, t.stabilization_omega};
-      controller.emplace(m, o);
+      if (s.tracking.enabled) controller.emplace(make_scene_controller(s.tracking));
     }
   }
 
@@ -183,6 +164,8 @@ template <int N>
 RunResult run(const Scene& s, const RunOptions& options) {
   using V = Eigen::Matrix<double, N, 1>;
   using State = Eigen::Matrix<double, 2 * N, 1>;
+  if (options.sampled_control && s.control_mode != ControlMode::kSampled)
+    throw SceneError(s.file + ": control from another process needs control.mode: sampled");
   const auto wall_start = std::chrono::steady_clock::now();
 
   RunResult result;
@@ -247,7 +230,17 @@ RunResult run(const Scene& s, const RunOptions& options) {
     if (sampled) {
       V q = x.template head<N>(), qd = x.template tail<N>();
       plant.measure(q, qd, stats);
-      held = plant.saturate(control.force(q, qd, t0, stats), stats);
+      if (options.sampled_control) {
+        // The force comes from elsewhere (a controller process); the run stops when it says so.
+        std::vector<double> qv(q.data(), q.data() + N), qdv(qd.data(), qd.data() + N), u(N, 0.0);
+        if (!options.sampled_control(static_cast<std::int64_t>(k), t0, qv, qdv, u)) {
+          stats.stopped_early = true;
+          break;
+        }
+        held = plant.saturate(Eigen::Map<const V>(u.data()), stats);
+      } else {
+        held = plant.saturate(control.force(q, qd, t0, stats), stats);
+      }
     }
     if (next_sample == 0) {
       record(x, 0.0);

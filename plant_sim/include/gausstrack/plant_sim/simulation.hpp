@@ -30,6 +30,7 @@ struct RunSummary {
   std::uint64_t control_evaluations = 0;
   std::uint64_t control_failures = 0;  ///< controller calls that returned a failure status
   double wall_time_s = 0;
+  bool stopped_early = false;  ///< the external control source ended the run
   /// Evaluations of each effect kind (indexed by EffectKind): zero for every kind not listed.
   std::array<std::uint64_t, static_cast<std::size_t>(EffectKind::kCount)> effect_evaluations{};
   // Constant-length pendulum compared with the angle-coordinate model (compare: angle_model).
@@ -46,6 +47,12 @@ struct RunResult {
 struct RunOptions {
   /// Called now and then with the simulated time (for a progress display).
   std::function<void(double t)> on_progress;
+  /// Sampled control from elsewhere (a controller process): called at the start of control
+  /// period `period` with the measured state, writes the force to hold into u (N entries) and
+  /// returns false to stop the run. Replaces the scene's own controller; needs sampled control.
+  std::function<bool(std::int64_t period, double t, const std::vector<double>& q,
+                     const std::vector<double>& qd, std::vector<double>& u)>
+      sampled_control;
 };
 
 RunResult run_scene(const Scene& scene, const RunOptions& options = {});
