@@ -135,7 +135,13 @@ class ConstraintSolver {
   using Solution = ConstraintSolution<N, P, Scalar>;
   using Options = SolverOptions<Scalar>;
 
-  explicit ConstraintSolver(const Options& options = Options{}) noexcept { set_options(options); }
+  explicit ConstraintSolver(const Options& options = Options{}) noexcept {
+    set_options(options);
+    // Eigen's default-constructed LLT leaves its status unset, and copying the solver would copy
+    // that indeterminate value: factor identities once so every member is defined.
+    mass_llt_.compute(MatrixNN::Identity());
+    gram_llt_.compute(MatrixPP::Identity());
+  }
 
   void set_options(const Options& options) noexcept {
     options_ = options;
