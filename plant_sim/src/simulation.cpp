@@ -27,7 +27,7 @@ class Plant {
  public:
   using V = Eigen::Matrix<double, N, 1>;
 
-  explicit Plant(const Scene& s) : scene_(s) {
+  explicit Plant(const Scene& s) {
     for (int i = 0; i < N; ++i) mass_(i) = s.masses[static_cast<std::size_t>(i)];
     for (const EffectSpec& e : s.effects) {
       switch (e.kind) {
@@ -119,7 +119,6 @@ class Plant {
   }
 
  private:
-  const Scene& scene_;
   V mass_;
   std::vector<EffectSpec> forces_;
   std::optional<EffectSpec> saturation_, noise_;
