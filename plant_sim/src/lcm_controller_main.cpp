@@ -1,27 +1,28 @@
-// gausstrack-controller --scene S [--set key=value ...] [--lcm-url URL]
-//                       [--state-channel C] [--command-channel C]
+// gausstrack-controller --scene S [common options] [--stats-out FILE]
 // Subscribes to plant states, evaluates the scene's tracking controller for each valid one and
 // publishes the command at once. Messages that do not decode, have the wrong dimension,
-// non-finite values or an old sequence number are counted and ignored.
+// non-finite values or an old sequence number are counted and ignored. Prints
+// "gausstrack-controller: ready" once subscribed; on SIGINT/SIGTERM publishes its loop_stats_t,
+// writes FILE (JSON) if asked and prints its counts.
+//
+// The compute path (decode into a preallocated message, the allocation-free control law, encode
+// into a fixed buffer, publish the bytes) allocates nothing: LCM's typed publish would.
 #include <lcm/lcm-cpp.hpp>
 
 #include <array>
-#include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
+#include <fstream>
 #include <string>
-#include <vector>
 
 #include "gausstrack/control_command_t.hpp"
+#include "gausstrack/loop_stats_t.hpp"
 #include "gausstrack/plant_sim/scene.hpp"
 #include "gausstrack/plant_sim/scene_controller.hpp"
 #include "gausstrack/plant_state_t.hpp"
+#include "process.hpp"
 
 namespace {
-
-volatile std::sig_atomic_t g_stop = 0;
-void on_signal(int) { g_stop = 1; }
 
 using namespace gausstrack::plant_sim;
 
@@ -36,15 +37,13 @@ class ControllerNode {
       return;
     }
     last_sequence_ = state_.sequence;
-    const auto start = std::chrono::steady_clock::now();
+    const std::int64_t start = monotonic_ns();
     const auto status = controller_.compute(Eigen::Map<const Eigen::Vector2d>(state_.q),
                                             Eigen::Map<const Eigen::Vector2d>(state_.qd), state_.t, out_);
-    const auto compute_ns =
-        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start).count();
+    const std::int64_t compute_ns = monotonic_ns() - start;
+    compute_ns_.add(static_cast<double>(compute_ns));
     command_ = {};
-    command_.utime = std::chrono::duration_cast<std::chrono::microseconds>(
-                         std::chrono::system_clock::now().time_since_epoch())
-                         .count();
+    command_.utime = wall_us();
     command_.sequence = ++published_;
     command_.state_sequence = state_.sequence;
     command_.dimension = 2;
@@ -64,6 +63,7 @@ class ControllerNode {
 
   long rejected() const { return rejected_; }
   long published() const { return published_; }
+  const LatencyRecorder& compute_ns() const { return compute_ns_; }
 
  private:
   bool valid(const gausstrack::plant_state_t& s) const {
@@ -83,40 +83,62 @@ class ControllerNode {
   std::int64_t last_sequence_ = -1;
   long rejected_ = 0;
   long published_ = 0;
+  LatencyRecorder compute_ns_{1u << 22};  // about 70 min at 1 kHz
 };
+
+int usage(const char* argv0) {
+  std::fprintf(stderr, "usage: %s %s [--stats-out FILE]\n", argv0, kCommonUsage);
+  return 2;
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string scene_path, url, state_channel = "GAUSSTRACK_STATE", command_channel = "GAUSSTRACK_COMMAND";
-  std::vector<std::string> sets;
+  ProcessOptions options;
+  std::string stats_out, error;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (a == "--scene" && has_value) scene_path = argv[++i];
-    else if (a == "--set" && has_value) sets.emplace_back(argv[++i]);
-    else if (a == "--lcm-url" && has_value) url = argv[++i];
-    else if (a == "--state-channel" && has_value) state_channel = argv[++i];
-    else if (a == "--command-channel" && has_value) command_channel = argv[++i];
-    else {
-      std::fprintf(stderr, "usage: %s --scene S [--set key=value ...] [--lcm-url URL] "
-                           "[--state-channel C] [--command-channel C]\n", argv[0]);
-      return 2;
+    if (parse_common_option(argc, argv, i, options, error)) {
+      if (!error.empty()) return std::fprintf(stderr, "error: %s\n", error.c_str()), 2;
+    } else if (a == "--stats-out" && i + 1 < argc) {
+      stats_out = argv[++i];
+    } else {
+      return usage(argv[0]);
     }
   }
-  if (scene_path.empty()) return std::fprintf(stderr, "error: --scene is required\n"), 2;
+  if (options.scene_path.empty()) return std::fprintf(stderr, "error: --scene is required\n"), usage(argv[0]);
   try {
-    const Scene scene = load_scene(scene_path, sets);
-    if (!scene.tracking.enabled) throw SceneError(scene_path + ": the scene has no tracking section to control");
-    lcm::LCM lcm(url);  // empty: LCM_DEFAULT_URL or LCM's own default
-    if (!lcm.good()) return std::fprintf(stderr, "error: cannot open LCM (%s)\n", url.c_str()), 1;
-    ControllerNode node(lcm, make_scene_controller(scene.tracking), command_channel);
-    lcm.subscribe(state_channel, &ControllerNode::on_state, &node);
-    std::signal(SIGINT, on_signal);
-    std::signal(SIGTERM, on_signal);
-    while (!g_stop) lcm.handleTimeout(100);
-    std::printf("gausstrack-controller: %ld commands published, %ld messages rejected\n", node.published(),
-                node.rejected());
+    const Scene scene = load_scene(options.scene_path, options.sets);
+    if (!scene.tracking.enabled)
+      throw SceneError(options.scene_path + ": the scene has no tracking section to control");
+    lcm::LCM lcm(options.lcm_url);  // empty: LCM_DEFAULT_URL or LCM's own default
+    if (!lcm.good()) return std::fprintf(stderr, "error: cannot open LCM (%s)\n", options.lcm_url.c_str()), 1;
+    ControllerNode node(lcm, make_scene_controller(scene.tracking), options.command_channel);
+    lcm.subscribe(options.state_channel, &ControllerNode::on_state, &node);
+    stop_on_signals();
+    apply_realtime(options, "gausstrack-controller");
+    std::printf("gausstrack-controller: ready\n");
+    std::fflush(stdout);
+    while (!g_stop_requested) lcm.handleTimeout(100);
+
+    gausstrack::loop_stats_t stats{};
+    stats.utime = wall_us();
+    stats.process = "controller";
+    stats.commands_published = node.published();
+    stats.messages_rejected = node.rejected();
+    stats.compute_ns_p50 = node.compute_ns().quantile(0.5);
+    stats.compute_ns_p99 = node.compute_ns().quantile(0.99);
+    stats.compute_ns_max = node.compute_ns().max();
+    lcm.publish(options.stats_channel, &stats);
+    if (!stats_out.empty()) {
+      std::ofstream out(stats_out);
+      out << "{\"process\": \"controller\", \"commands_published\": " << node.published()
+          << ", \"messages_rejected\": " << node.rejected() << ", " << node.compute_ns().json("compute_ns") << "}\n";
+      if (!out) return std::fprintf(stderr, "error: cannot write %s\n", stats_out.c_str()), 1;
+    }
+    std::printf("gausstrack-controller: %ld commands published, %ld messages rejected, compute p50 %.0f ns, "
+                "p99 %.0f ns, max %.0f ns\n",
+                node.published(), node.rejected(), stats.compute_ns_p50, stats.compute_ns_p99, stats.compute_ns_max);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

@@ -1,8 +1,5 @@
 // gausstrack-sim SCENE.yaml [--out DIR] [--set key=value ...]
 // Runs a scene in one process and writes DIR/trajectory.csv and DIR/summary.json.
-#include <unistd.h>
-
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -43,26 +40,15 @@ int main(int argc, char** argv) {
   try {
     const Scene scene = load_scene(scene_path, sets);
     RunOptions options;
-    const bool tty = isatty(fileno(stderr)) != 0;
-    const auto start = std::chrono::steady_clock::now();
-    bool shown = false;
-    if (tty) {
-      options.on_progress = [&](double t) {
-        if (std::chrono::steady_clock::now() - start < std::chrono::seconds(1)) return;
-        std::fprintf(stderr, "\r%s: t = %.3f / %.3f s (%3.0f%%)", scene.name.c_str(), t, scene.duration,
-                     100.0 * t / scene.duration);
-        shown = true;
-      };
-    }
+    options.on_progress = terminal_progress(scene);
     const RunResult result = run_scene(scene, options);
-    if (shown) std::fprintf(stderr, "\n");
     std::filesystem::create_directories(out_dir);
     write_trajectory_csv(scene, result, out_dir + "/trajectory.csv");
     write_summary_json(scene, result, out_dir + "/summary.json");
     const RunSummary& s = result.summary;
-    std::printf("%s: %zu samples, max tracking error %.3g, max constraint residual %.3g, %llu steps, "
+    std::printf("%s: %zu samples, max tracking error %.3g (rms %.3g), max constraint residual %.3g, %llu steps, "
                 "%llu rhs evaluations, %.3f s -> %s\n",
-                scene.name.c_str(), result.samples.size(), s.max_tracking_error, s.max_constraint_residual,
+                scene.name.c_str(), result.samples.size(), s.max_tracking_error, s.rms_tracking_error, s.max_constraint_residual,
                 static_cast<unsigned long long>(s.steps), static_cast<unsigned long long>(s.rhs_evaluations),
                 s.wall_time_s, out_dir.c_str());
     if (s.compared_angle_model)

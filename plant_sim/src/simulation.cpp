@@ -1,5 +1,7 @@
 #include "gausstrack/plant_sim/simulation.hpp"
 
+#include <unistd.h>
+
 #include <Eigen/Core>
 #include <boost/numeric/odeint.hpp>
 #include <boost/numeric/odeint/external/eigen/eigen.hpp>
@@ -10,6 +12,7 @@
 #include <numbers>
 #include <optional>
 #include <random>
+#include <span>
 #include <stdexcept>
 
 #include "gausstrack/constraint_solver.hpp"
@@ -169,6 +172,8 @@ RunResult run(const Scene& s, const RunOptions& options) {
 
   RunResult result;
   RunSummary& stats = result.summary;
+  const auto sample_count = static_cast<std::size_t>(std::floor(s.duration / s.output_period + 1e-9)) + 1;
+  result.samples.reserve(sample_count);
   Plant<N> plant(s);
   Control<N> control(s);
 
@@ -188,7 +193,6 @@ RunResult run(const Scene& s, const RunOptions& options) {
   }
 
   // Exact output times k * output_period.
-  const auto sample_count = static_cast<std::size_t>(std::floor(s.duration / s.output_period + 1e-9)) + 1;
   std::size_t next_sample = 0;
   auto record = [&](const State& state, double t) {
     Sample smp;
@@ -231,12 +235,13 @@ RunResult run(const Scene& s, const RunOptions& options) {
       plant.measure(q, qd, stats);
       if (options.sampled_control) {
         // The force comes from elsewhere (a controller process); the run stops when it says so.
-        std::vector<double> qv(q.data(), q.data() + N), qdv(qd.data(), qd.data() + N), u(N, 0.0);
-        if (!options.sampled_control(static_cast<std::int64_t>(k), t0, qv, qdv, u)) {
+        V u = V::Zero();
+        if (!options.sampled_control(static_cast<std::int64_t>(k), t0, std::span<const double>(q.data(), N),
+                                     std::span<const double>(qd.data(), N), std::span<double>(u.data(), N))) {
           stats.stopped_early = true;
           break;
         }
-        held = plant.saturate(Eigen::Map<const V>(u.data()), stats);
+        held = plant.saturate(u, stats);
       } else {
         held = plant.saturate(control.force(q, qd, t0, stats), stats);
       }
@@ -338,6 +343,9 @@ RunResult run(const Scene& s, const RunOptions& options) {
     }
   }
 
+  double sum_squares = 0;
+  for (const Sample& smp : result.samples) sum_squares += smp.tracking_error * smp.tracking_error;
+  if (!result.samples.empty()) stats.rms_tracking_error = std::sqrt(sum_squares / static_cast<double>(result.samples.size()));
   stats.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return result;
 }
@@ -406,7 +414,18 @@ void write_trajectory_csv(const Scene& scene, const RunResult& result, const std
   if (!out) throw std::runtime_error("error writing " + path);
 }
 
-void write_summary_json(const Scene& scene, const RunResult& result, const std::string& path) {
+std::function<void(double t)> terminal_progress(const Scene& scene) {
+  if (isatty(fileno(stderr)) == 0) return {};
+  const auto start = std::chrono::steady_clock::now();
+  return [start, name = scene.name, duration = scene.duration](double t) {
+    if (std::chrono::steady_clock::now() - start < std::chrono::seconds(1)) return;
+    std::fprintf(stderr, "\r%s: t = %.3f / %.3f s (%3.0f%%)%s", name.c_str(), t, duration, 100.0 * t / duration,
+                 t >= duration ? "\n" : "");
+  };
+}
+
+void write_summary_json(const Scene& scene, const RunResult& result, const std::string& path,
+                        const std::string& extra_members) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path);
   const RunSummary& s = result.summary;
@@ -417,6 +436,7 @@ void write_summary_json(const Scene& scene, const RunResult& result, const std::
   };
   out << "{\n  \"scene\": \"" << scene.name << "\",\n";
   num("max_tracking_error", s.max_tracking_error);
+  num("rms_tracking_error", s.rms_tracking_error);
   num("max_constraint_residual", s.max_constraint_residual);
   num("steps", static_cast<double>(s.steps));
   num("rhs_evaluations", static_cast<double>(s.rhs_evaluations));
@@ -430,6 +450,7 @@ void write_summary_json(const Scene& scene, const RunResult& result, const std::
   for (std::size_t k = 0; k < s.effect_evaluations.size(); ++k)
     out << (k ? ", " : "") << "\"" << to_string(static_cast<EffectKind>(k)) << "\": " << s.effect_evaluations[k];
   out << "},\n";
+  if (!extra_members.empty()) out << "  " << extra_members << ",\n";
   num("wall_time_s", s.wall_time_s, false);
   out << "}\n";
   if (!out) throw std::runtime_error("error writing " + path);

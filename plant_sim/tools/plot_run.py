@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Draws a run's figures as PNG files next to its trajectory.csv, in the manner of the paper's
 panels: displacements and velocities over time, phase plots, constraint or tracking error on a
-log axis, and control forces.
+log axis, and control forces; and, for a closed-loop run with a latency.csv, its round-trip
+latency over the run and as a histogram.
 
 usage: plot_run.py DIR [DIR ...]
 """
@@ -77,6 +78,29 @@ def plot_dir(d):
         ax.legend()
         ax.grid(True, alpha=0.3)
         save(fig, "control.png")
+
+    latency_path = os.path.join(d, "latency.csv")
+    if os.path.exists(latency_path):
+        with open(latency_path, newline="") as f:
+            rows = list(csv.DictReader(f))
+        if rows:
+            rt = sorted(float(r["round_trip_us"]) for r in rows)
+            fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
+            ax[0].plot([int(r["state_sequence"]) for r in rows], [float(r["round_trip_us"]) for r in rows],
+                       ".", ms=1.5)
+            ax[0].set_yscale("log")
+            ax[0].set_xlabel("state sequence (control period)")
+            ax[0].set_ylabel("round trip [us]")
+            ax[1].hist(rt, bins=100, log=True)
+            for q, style in ((0.5, "-"), (0.99, "--"), (0.999, ":")):
+                v = rt[min(len(rt) - 1, int(q * len(rt)))]
+                ax[1].axvline(v, color="k", ls=style, lw=0.8, label=f"p{q * 100:g} {v:.0f} us")
+            ax[1].set_xlabel("round trip: state published to command received [us]")
+            ax[1].set_ylabel("count")
+            ax[1].legend()
+            for a in ax:
+                a.grid(True, which="both", alpha=0.3)
+            save(fig, "latency.png")
     return written
 
 

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,7 @@ struct Sample {
 
 struct RunSummary {
   double max_tracking_error = 0;
+  double rms_tracking_error = 0;  ///< over the samples
   double max_constraint_residual = 0;
   std::uint64_t steps = 0;            ///< accepted integrator steps
   std::uint64_t rhs_evaluations = 0;  ///< evaluations of the equations of motion
@@ -48,14 +50,19 @@ struct RunOptions {
   /// Called now and then with the simulated time (for a progress display).
   std::function<void(double t)> on_progress;
   /// Sampled control from elsewhere (a controller process): called at the start of control
-  /// period `period` with the measured state, writes the force to hold into u (N entries) and
-  /// returns false to stop the run. Replaces the scene's own controller; needs sampled control.
-  std::function<bool(std::int64_t period, double t, const std::vector<double>& q,
-                     const std::vector<double>& qd, std::vector<double>& u)>
+  /// period `period` with the measured state, writes the force to hold into u (N entries, zero
+  /// on entry) and returns false to stop the run. Replaces the scene's own controller; needs
+  /// sampled control. The spans view fixed-size storage: calling it allocates nothing.
+  std::function<bool(std::int64_t period, double t, std::span<const double> q, std::span<const double> qd,
+                     std::span<double> u)>
       sampled_control;
 };
 
 RunResult run_scene(const Scene& scene, const RunOptions& options = {});
+
+/// A progress display for on_progress: "name: t = 3.000 / 10.000 s ( 30%)" on stderr, rewritten
+/// in place, shown only when stderr is a terminal and the run has lasted a second.
+std::function<void(double t)> terminal_progress(const Scene& scene);
 
 /// The plant's generalized impressed force Q(q, q', t) from the scene's force effects.
 std::vector<double> plant_applied_force(const Scene& scene, const std::vector<double>& q,
@@ -67,6 +74,9 @@ std::vector<double> plant_acceleration(const Scene& scene, const std::vector<dou
 
 /// `t,q1..qN,qd1..qdN,u1..uN,tracking_error,constraint_residual`, one row per sample.
 void write_trajectory_csv(const Scene& scene, const RunResult& result, const std::string& path);
-void write_summary_json(const Scene& scene, const RunResult& result, const std::string& path);
+/// The run's summary; `extra_members` (JSON object members, comma-separated, without braces) are
+/// added at the top level, e.g. a process's loop statistics.
+void write_summary_json(const Scene& scene, const RunResult& result, const std::string& path,
+                        const std::string& extra_members = {});
 
 }  // namespace gausstrack::plant_sim
