@@ -4,9 +4,6 @@
 #undef NDEBUG
 #define EIGEN_RUNTIME_NO_MALLOC
 
-#include <atomic>
-#include <cstdlib>
-#include <new>
 #include <vector>
 
 #include "gausstrack/systems/coupled_duffing.hpp"
@@ -14,57 +11,8 @@
 #include "gausstrack/systems/nonholonomic_particle.hpp"
 #include "gausstrack/systems/pendulum.hpp"
 #include "gausstrack/tracking_controller.hpp"
+#include "allocation_counter.hpp"
 #include "test_support.hpp"
-
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<long> g_allocations{0};
-void note_allocation() {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-}
-}  // namespace
-
-void* operator new(std::size_t n) {
-  note_allocation();
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-
-#if !defined(__SANITIZE_ADDRESS__)
-// glibc lets a program interpose malloc; the sanitizer runtimes own these symbols themselves.
-extern "C" {
-void* __libc_malloc(std::size_t);
-void* __libc_calloc(std::size_t, std::size_t);
-void* __libc_realloc(void*, std::size_t);
-void* __libc_memalign(std::size_t, std::size_t);
-void* malloc(std::size_t n) {
-  note_allocation();
-  return __libc_malloc(n);
-}
-void* calloc(std::size_t n, std::size_t s) {
-  note_allocation();
-  return __libc_calloc(n, s);
-}
-void* realloc(void* p, std::size_t n) {
-  note_allocation();
-  return __libc_realloc(p, n);
-}
-void* aligned_alloc(std::size_t a, std::size_t n) {
-  note_allocation();
-  return __libc_memalign(a, n);
-}
-int posix_memalign(void** out, std::size_t a, std::size_t n) {
-  note_allocation();
-  *out = __libc_memalign(a, n);
-  return *out ? 0 : 12;
-}
-}
-#endif
 
 namespace gausstrack::test {
 namespace {
@@ -72,13 +20,10 @@ namespace {
 // Runs `call` with both checks armed and returns the number of allocations seen.
 template <typename F>
 long allocations_during(F&& call) {
-  g_allocations = 0;
   Eigen::internal::set_is_malloc_allowed(false);
-  g_counting = true;
-  call();
-  g_counting = false;
+  const long n = support::allocations_during(call);
   Eigen::internal::set_is_malloc_allowed(true);
-  return g_allocations.load();
+  return n;
 }
 
 TEST(Allocation, CounterCatchesAnAllocation) {
@@ -104,11 +49,7 @@ TEST(Allocation, EigenCompleteOrthogonalSolveAllocatesForFixedSizes) {
   Eigen::CompleteOrthogonalDecomposition<Eigen::Matrix<double, 3, 6>> cod(b);
   const Eigen::Vector3d r = rng.matrix<3, 1>();
   Eigen::Matrix<double, 6, 1> y;
-  g_allocations = 0;
-  g_counting = true;
-  y = cod.solve(r);
-  g_counting = false;
-  EXPECT_GE(g_allocations.load(), 1);
+  EXPECT_GE(support::allocations_during([&] { y = cod.solve(r); }), 1);
 }
 
 template <int N, int P>

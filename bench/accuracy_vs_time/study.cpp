@@ -1,0 +1,417 @@
+// accuracy_vs_time SCENE_DIR OUT_DIR [--quick]
+// What accuracy costs in time. Each section measures error against cost and writes one CSV into
+// OUT_DIR; report_study.py turns them into Markdown work-precision tables, plots and the Pareto
+// front.
+//   integrators.csv  every paper scene (SCENE_DIR/*.yaml) with RK4 at steps 1e-2..1e-5 and
+//                    Dormand-Prince 5(4) and Fehlberg 7(8) at tolerances 1e-4..1e-13 (odeint),
+//                    against a reference at tolerance 1e-14 (Fehlberg 7(8)) and, where one exists,
+//                    an independent formulation: the angle-coordinate pendulum, the
+//                    minimal-coordinate Duffing oscillator (x2 alone; x1 = x2 + s(t)).
+//   peer.csv         the Duffing tracking task (law and plant in one right-hand side) integrated
+//                    by odeint and by SUNDIALS ARKODE's explicit RK (same tableaux) at equal
+//                    tolerances, against a reference at 1e-14.
+//   strategies.csv   generalized-inverse strategies and damping on normal, near-singular and
+//                    redundant constraint sets: force error against a long-double KKT reference,
+//                    constraint residual, cost per call.
+//   control_rate.csv the Duffing task with sampled-and-held control at 100 Hz..10 kHz, with and
+//                    without stabilization.
+//   stabilization.csv stabilization gains at 1 kHz, exact model and a plant whose k1 is 10% high.
+// --quick runs a token subset (for CI).
+#include <arkode/arkode_erkstep.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+
+#include <Eigen/Dense>
+#include <boost/numeric/odeint.hpp>
+#include <boost/numeric/odeint/external/eigen/eigen.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "gausstrack/constraint_solver.hpp"
+#include "gausstrack/plant_sim/scene.hpp"
+#include "gausstrack/plant_sim/simulation.hpp"
+#include "gausstrack/systems/coupled_duffing.hpp"
+#include "gausstrack/tracking_controller.hpp"
+
+namespace {
+
+namespace odeint = boost::numeric::odeint;
+namespace fs = std::filesystem;
+using namespace gausstrack;
+using plant_sim::Method;
+using plant_sim::RunResult;
+using plant_sim::Scene;
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Largest |q - q_ref| over the samples, and at the final sample.
+std::pair<double, double> trajectory_error(const RunResult& run, const RunResult& ref) {
+  double worst = 0, final = 0;
+  const std::size_t n = std::min(run.samples.size(), ref.samples.size());
+  for (std::size_t k = 0; k < n; ++k) {
+    double e = 0;
+    for (std::size_t i = 0; i < run.samples[k].q.size(); ++i)
+      e = std::max(e, std::abs(run.samples[k].q[i] - ref.samples[k].q[i]));
+    worst = std::max(worst, e);
+    if (k + 1 == n) final = e;
+  }
+  return {worst, final};
+}
+
+// The Duffing oscillator held on x1 - x2 = s(t) has one degree of freedom. Adding eqs. (35a) and
+// (35b), the constraint forces cancel (Q'_1 = -Q'_2):
+//   (m1 + m2) x2'' = -(k2 x2 + c2 x2' + kb2 x2^3) - m1 s''(t),   x1 = x2 + s(t).
+// Returns the largest |q - q_minimal| over the run's samples.
+double minimal_coordinate_difference(const Scene& s, const RunResult& run) {
+  const auto& tr = s.tracking;
+  const systems::DecayingSine<double> sine{tr.amplitude, tr.alpha, tr.omega};
+  using S2 = Eigen::Vector2d;
+  auto rhs = [&](const S2& z, S2& dz, double t) {
+    dz << z(1), (-(tr.k2 * z(0) + tr.c2 * z(1) + tr.kb2 * z(0) * z(0) * z(0)) - tr.m1 * sine.acceleration(t)) /
+                    (tr.m1 + tr.m2);
+  };
+  using D = odeint::runge_kutta_dopri5<S2, double, S2, double, odeint::vector_space_algebra>;
+  auto stepper = odeint::make_dense_output(1e-14, 1e-14, D());
+  stepper.initialize(S2(s.q0[1], s.qd0[1]), 0.0, 1e-4);
+  double worst = 0;
+  for (const auto& smp : run.samples) {
+    while (stepper.current_time() < smp.t) stepper.do_step(rhs);
+    S2 z(s.q0[1], s.qd0[1]);
+    if (smp.t > 0) stepper.calc_state(smp.t, z);
+    worst = std::max({worst, std::abs(smp.q[1] - z(0)), std::abs(smp.q[0] - z(0) - sine.position(smp.t))});
+  }
+  return worst;
+}
+
+void integrators(const std::vector<fs::path>& scenes, std::ofstream& csv, bool quick) {
+  csv << "scene,method,setting,rhs_evaluations,wall_s,max_error,final_error,independent_difference,"
+         "max_tracking_error,max_constraint_residual\n";
+  for (const fs::path& path : scenes) {
+    Scene base = plant_sim::load_scene(path.string());
+    if (quick) base.duration = 1.0;
+    Scene ref_scene = base;
+    ref_scene.method = Method::kRkf78;
+    ref_scene.tolerance = 1e-14;
+    const RunResult ref = plant_sim::run_scene(ref_scene);
+    struct Case {
+      Method method;
+      const char* name;
+      double setting;
+    };
+    std::vector<Case> cases;
+    for (double h : {1e-2, 1e-3, 1e-4, 1e-5})
+      if (!quick || h >= 1e-3) cases.push_back({Method::kRk4, "rk4", h});
+    for (int e = 4; e <= 13; ++e)
+      if (!quick || e % 4 == 0)
+        for (auto [m, name] : {std::pair{Method::kDopri5, "dopri5"}, std::pair{Method::kRkf78, "rkf78"}})
+          cases.push_back({m, name, std::pow(10.0, -e)});
+    for (const Case& c : cases) {
+      Scene s = base;
+      s.method = c.method;
+      (c.method == Method::kRk4 ? s.step : s.tolerance) = c.setting;
+      const RunResult run = plant_sim::run_scene(s);
+      const auto [worst, final] = trajectory_error(run, ref);
+      double independent = std::nan("");
+      if (s.compare_angle_model) independent = run.summary.max_angle_model_difference;
+      else if (s.tracking.enabled && s.control_mode == plant_sim::ControlMode::kContinuous)
+        independent = minimal_coordinate_difference(s, run);
+      char line[512];
+      std::snprintf(line, sizeof line, "%s,%s,%g,%llu,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", base.name.c_str(), c.name,
+                    c.setting, static_cast<unsigned long long>(run.summary.rhs_evaluations), run.summary.wall_time_s,
+                    worst, final, independent, run.summary.max_tracking_error, run.summary.max_constraint_residual);
+      csv << line;
+    }
+    std::printf("  integrators: %s (%zu runs)\n", base.name.c_str(), cases.size());
+  }
+}
+
+// The Duffing tracking task as one ODE: plant x'' = A^-1 (Q' - f) with Q' from the library.
+struct DuffingTask {
+  systems::CoupledDuffing<double> model;
+  TrackingController<systems::CoupledDuffing<double>> controller;
+  TrackingController<systems::CoupledDuffing<double>>::Output out;
+  long evaluations = 0;
+  explicit DuffingTask(double alpha) : controller(make_model(alpha)) { model = make_model(alpha); }
+  static systems::CoupledDuffing<double> make_model(double alpha) {
+    systems::CoupledDuffing<double> m;
+    m.trajectory.alpha = alpha;
+    return m;
+  }
+  void rhs(const double* x, double* dx, double t) {
+    ++evaluations;
+    const Eigen::Vector2d q(x[0], x[1]), qd(x[2], x[3]);
+    controller.compute(q, qd, t, out);
+    const Eigen::Vector2d f = model.nonlinear_force(q, qd, t);
+    dx[0] = x[2];
+    dx[1] = x[3];
+    dx[2] = (out.force(0) - f(0)) / model.m1;
+    dx[3] = (out.force(1) - f(1)) / model.m2;
+  }
+  Eigen::Vector4d initial() const { return {1.0, 1.0, model.consistent_x1_velocity(2.0), 2.0}; }
+};
+
+int arkode_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {
+  static_cast<DuffingTask*>(user)->rhs(N_VGetArrayPointer(y), N_VGetArrayPointer(ydot), t);
+  return 0;
+}
+
+struct PeerResult {
+  Eigen::Vector4d final;
+  long evaluations;
+  double wall_s;
+};
+
+PeerResult run_odeint(const char* method, double tol, double alpha, double duration) {
+  DuffingTask task(alpha);
+  using V = Eigen::Vector4d;
+  V x = task.initial();
+  auto rhs = [&](const V& s, V& ds, double t) { task.rhs(s.data(), ds.data(), t); };
+  const auto t0 = std::chrono::steady_clock::now();
+  using Dopri = odeint::runge_kutta_dopri5<V, double, V, double, odeint::vector_space_algebra>;
+  using Rkf = odeint::runge_kutta_fehlberg78<V, double, V, double, odeint::vector_space_algebra>;
+  if (std::string(method) == "dopri5")
+    odeint::integrate_adaptive(odeint::make_controlled(tol, tol, Dopri()), rhs, x, 0.0, duration, 1e-3);
+  else
+    odeint::integrate_adaptive(odeint::make_controlled(tol, tol, Rkf()), rhs, x, 0.0, duration, 1e-3);
+  return {x, task.evaluations, seconds_since(t0)};
+}
+
+PeerResult run_arkode(ARKODE_ERKTableID table, double tol, double alpha, double duration) {
+  DuffingTask task(alpha);
+  SUNContext ctx = nullptr;
+  SUNContext_Create(nullptr, &ctx);
+  N_Vector y = N_VNew_Serial(4, ctx);
+  const Eigen::Vector4d x0 = task.initial();
+  for (int i = 0; i < 4; ++i) N_VGetArrayPointer(y)[i] = x0(i);
+  const auto t0 = std::chrono::steady_clock::now();
+  void* mem = ERKStepCreate(arkode_rhs, 0.0, y, ctx);
+  ERKStepSetUserData(mem, &task);
+  ERKStepSStolerances(mem, tol, tol);
+  ERKStepSetTableNum(mem, table);
+  ERKStepSetMaxNumSteps(mem, 100000000);
+  sunrealtype t = 0;
+  ERKStepSetStopTime(mem, duration);
+  const int flag = ERKStepEvolve(mem, duration, y, &t, ARK_NORMAL);
+  const double wall = seconds_since(t0);
+  PeerResult r{Eigen::Map<Eigen::Vector4d>(N_VGetArrayPointer(y)), task.evaluations, wall};
+  if (flag < 0) r.final.setConstant(std::nan(""));
+  ERKStepFree(&mem);
+  N_VDestroy(y);
+  SUNContext_Free(&ctx);
+  return r;
+}
+
+void peer(std::ofstream& csv, bool quick) {
+  csv << "integrator,tolerance,rhs_evaluations,wall_s,final_error\n";
+  const double alpha = 0.4, duration = quick ? 1.0 : 10.0;
+  const PeerResult ref = run_odeint("rkf78", 1e-14, alpha, duration);
+  for (int e = 4; e <= 13; ++e) {
+    if (quick && e % 4 != 0) continue;
+    const double tol = std::pow(10.0, -e);
+    const PeerResult runs[] = {
+        run_odeint("dopri5", tol, alpha, duration), run_arkode(ARKODE_DORMAND_PRINCE_7_4_5, tol, alpha, duration),
+        run_odeint("rkf78", tol, alpha, duration), run_arkode(ARKODE_FEHLBERG_13_7_8, tol, alpha, duration)};
+    const char* names[] = {"odeint dopri5", "arkode dormand_prince_7_4_5", "odeint rkf78", "arkode fehlberg_13_7_8"};
+    for (int k = 0; k < 4; ++k) {
+      char line[256];
+      std::snprintf(line, sizeof line, "%s,%g,%ld,%.6g,%.6g\n", names[k], tol, runs[k].evaluations, runs[k].wall_s,
+                    (runs[k].final - ref.final).cwiseAbs().maxCoeff());
+      csv << line;
+    }
+  }
+  std::printf("  peer: odeint and ARKODE on the Duffing task\n");
+}
+
+// Strategies on one constraint set. The reference force comes from the KKT system in long
+// double, with redundant rows removed first (they change neither the motion nor Q').
+void strategies(std::ofstream& csv, bool quick) {
+  csv << "case,strategy,damping,force_error,constraint_residual,force_norm,ns_per_call,warnings\n";
+  constexpr int N = 6, P = 3;
+  using Mat = Eigen::Matrix<double, N, N>;
+  using Dm = Eigen::Matrix<double, P, N>;
+  std::mt19937_64 rng(1993);
+  std::uniform_real_distribution<double> u(-1, 1);
+  auto random = [&](auto& m) {
+    for (Eigen::Index i = 0; i < m.size(); ++i) m(i) = u(rng);
+  };
+  Mat r;
+  random(r);
+  const Mat A = r * r.transpose() + N * Mat::Identity();
+  Eigen::Matrix<double, N, 1> f, Q;
+  random(f);
+  random(Q);
+  Dm base;
+  random(base);
+  // D = U diag(s) V^T with chosen singular values.
+  Eigen::JacobiSVD<Dm> svd(base, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  auto with_singular_values = [&](double s2) {
+    Eigen::Matrix<double, P, N> S = Eigen::Matrix<double, P, N>::Zero();
+    S(0, 0) = 1, S(1, 1) = 0.5, S(2, 2) = s2;
+    return Dm(svd.matrixU() * S * svd.matrixV().transpose());
+  };
+  struct Case {
+    const char* name;
+    Dm D;
+    int independent_rows;  // the reference uses the first rows only
+  };
+  Dm redundant = base;
+  redundant.row(2) = redundant.row(0) + 2 * redundant.row(1);
+  const Case cases[] = {{"normal", with_singular_values(0.25), 3},
+                        {"near_singular_1e-6", with_singular_values(1e-6), 3},
+                        {"near_singular_1e-10", with_singular_values(1e-10), 3},
+                        {"redundant", redundant, 2}};
+  for (const Case& c : cases) {
+    // A consistent right side: g = D qdd0 for some qdd0.
+    Eigen::Matrix<double, N, 1> qdd0;
+    random(qdd0);
+    const Eigen::Matrix<double, P, 1> g = c.D * qdd0;
+    const int p = c.independent_rows;
+    using LM = Eigen::Matrix<long double, Eigen::Dynamic, Eigen::Dynamic>;
+    LM K = LM::Zero(N + p, N + p);
+    K.topLeftCorner(N, N) = A.cast<long double>();
+    K.topRightCorner(N, p) = c.D.topRows(p).transpose().cast<long double>();
+    K.bottomLeftCorner(p, N) = c.D.topRows(p).cast<long double>();
+    Eigen::Matrix<long double, Eigen::Dynamic, 1> rhs(N + p);
+    rhs << (Q - f).cast<long double>(), g.topRows(p).cast<long double>();
+    const Eigen::Matrix<long double, Eigen::Dynamic, 1> x = K.fullPivLu().solve(rhs);
+    const Eigen::Matrix<long double, N, 1> ref_force = A.cast<long double>() * x.head(N) - (Q - f).cast<long double>();
+    const Eigen::Matrix<double, N, 1> reference = ref_force.cast<double>();
+
+    struct Choice {
+      InverseStrategy s;
+      const char* name;
+      double damping;
+    };
+    const Choice choices[] = {{InverseStrategy::kCholeskyWithFallback, "cholesky", 0},
+                              {InverseStrategy::kSvd, "svd", 0},
+                              {InverseStrategy::kCompleteOrthogonal, "cod", 0},
+                              {InverseStrategy::kDampedLeastSquares, "damped", 1e-12},
+                              {InverseStrategy::kDampedLeastSquares, "damped", 1e-8},
+                              {InverseStrategy::kDampedLeastSquares, "damped", 1e-4}};
+    for (const Choice& ch : choices) {
+      SolverOptions<double> o;
+      o.strategy = ch.s;
+      o.damping = ch.damping;
+      ConstraintSolver<N, P> solver(o);
+      ConstraintSolution<N, P> sol;
+      solver.solve(A, f, Q, c.D, g, sol);
+      const int calls = quick ? 100 : 20000;
+      const auto t0 = std::chrono::steady_clock::now();
+      for (int k = 0; k < calls; ++k) {
+        solver.solve(A, f, Q, c.D, g, sol);
+        asm volatile("" : : "g"(sol.constraint_force.data()) : "memory");
+      }
+      const double ns = seconds_since(t0) * 1e9 / calls;
+      char line[256];
+      std::snprintf(line, sizeof line, "%s,%s,%g,%.6g,%.6g,%.6g,%.4g,%u\n", c.name, ch.name, ch.damping,
+                    (sol.constraint_force - reference).norm() / reference.norm(), sol.diagnostics.residual_norm,
+                    sol.constraint_force.norm(), ns, sol.diagnostics.warnings);
+      csv << line;
+    }
+  }
+  std::printf("  strategies: normal, near-singular and redundant constraint sets\n");
+}
+
+Scene duffing_scene(const fs::path& dir) { return plant_sim::load_scene((dir / "duffing_alpha4.yaml").string()); }
+
+void control_rate(const fs::path& dir, std::ofstream& csv, bool quick) {
+  csv << "rate_hz,stabilization_omega,max_tracking_error,rms_tracking_error,control_evaluations,wall_s\n";
+  for (double rate : {100.0, 200.0, 500.0, 1000.0, 2000.0, 5000.0, 10000.0}) {
+    if (quick && rate != 1000.0) continue;
+    for (double omega : {0.0, 20.0}) {
+      Scene s = duffing_scene(dir);
+      if (quick) s.duration = 1.0;
+      s.control_mode = plant_sim::ControlMode::kSampled;
+      s.control_rate = rate;
+      s.tracking.zeta = 1.0;
+      s.tracking.stabilization_omega = omega;
+      const RunResult run = plant_sim::run_scene(s);
+      char line[256];
+      std::snprintf(line, sizeof line, "%g,%g,%.6g,%.6g,%llu,%.6g\n", rate, omega, run.summary.max_tracking_error,
+                    run.summary.rms_tracking_error,
+                    static_cast<unsigned long long>(run.summary.control_evaluations), run.summary.wall_time_s);
+      csv << line;
+    }
+  }
+  std::printf("  control rate: 100 Hz to 10 kHz\n");
+}
+
+void stabilization(const fs::path& dir, std::ofstream& csv, bool quick) {
+  csv << "plant,stabilization_omega,max_tracking_error,rms_tracking_error,final_tracking_error\n";
+  for (const char* plant : {"exact", "k1_10pct_high"}) {
+    for (double omega : {0.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0}) {
+      if (quick && omega != 20.0) continue;
+      Scene s = duffing_scene(dir);
+      if (quick) s.duration = 1.0;
+      s.control_mode = plant_sim::ControlMode::kSampled;
+      s.control_rate = 1000.0;
+      s.tracking.zeta = 1.0;
+      s.tracking.stabilization_omega = omega;
+      if (std::string(plant) != "exact") s.effects[0].value *= 1.1;  // the k1 spring
+      const RunResult run = plant_sim::run_scene(s);
+      char line[256];
+      std::snprintf(line, sizeof line, "%s,%g,%.6g,%.6g,%.6g\n", plant, omega, run.summary.max_tracking_error,
+                    run.summary.rms_tracking_error, std::abs(run.samples.back().tracking_error));
+      csv << line;
+    }
+  }
+  std::printf("  stabilization gains at 1 kHz\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3 || argc > 4 || (argc == 4 && std::string(argv[3]) != "--quick")) {
+    std::fprintf(stderr, "usage: %s SCENE_DIR OUT_DIR [--quick]\n", argv[0]);
+    return 2;
+  }
+  const fs::path scene_dir = argv[1], out = argv[2];
+  const bool quick = argc == 4;
+  try {
+    fs::create_directories(out);
+    std::vector<fs::path> scenes;
+    for (const auto& e : fs::directory_iterator(scene_dir))
+      if (e.path().extension() == ".yaml") scenes.push_back(e.path());
+    std::sort(scenes.begin(), scenes.end());
+    if (scenes.empty()) throw std::runtime_error("no scenes in " + scene_dir.string());
+    const auto t0 = std::chrono::steady_clock::now();
+    auto open = [&](const char* name) {
+      std::ofstream f(out / name);
+      if (!f) throw std::runtime_error("cannot write " + (out / name).string());
+      return f;
+    };
+    {
+      auto f = open("integrators.csv");
+      integrators(scenes, f, quick);
+    }
+    {
+      auto f = open("peer.csv");
+      peer(f, quick);
+    }
+    {
+      auto f = open("strategies.csv");
+      strategies(f, quick);
+    }
+    {
+      auto f = open("control_rate.csv");
+      control_rate(scene_dir, f, quick);
+    }
+    {
+      auto f = open("stabilization.csv");
+      stabilization(scene_dir, f, quick);
+    }
+    std::printf("accuracy_vs_time: %.1f s -> %s\n", seconds_since(t0), out.c_str());
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,179 @@
+// One full controller evaluation (model terms + eq. 32) per generalized-inverse strategy, beside
+// baselines computed from the same model terms in the same run:
+//   literal_fixed  the paper's formulas with fixed-size SVD pseudo-inverses and A^(1/2)
+//                  (reference/literal_formulas.hpp);
+//   dynamic_user   what a typical user writes with dynamic-size Eigen: MatrixXd, the symmetric
+//                  square root from SelfAdjointEigenSolver, completeOrthogonalDecomposition()
+//                  .pseudoInverse(), Q' = A^(1/2) (D A^(-1/2))^+ (g - D a);
+//   dynamic_kkt    the KKT system [A D^T; D 0] [q''; -lambda] = [Q - f; g] solved by a
+//                  dynamic-size LU, Q' = A q'' + f - Q;
+//   closed_form    (Duffing only) the hand-derived force Q' = (r, -r) / (1/m1 + 1/m2),
+//                  r = s'' - (a1 - a2): the floor.
+// Each benchmark's time is Google Benchmark's (calls back to back over a set of 64 states).
+// After its loop, a second pass times calls one by one for the counters p50_ns, p99_ns, p999_ns
+// and max_ns (these include two clock reads; `timer_overhead` measures them), and
+// allocs_per_call counts heap allocations (operator new and malloc) in the main loop.
+#pragma once
+
+#include <benchmark/benchmark.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <random>
+#include <string>
+
+#include "allocation_counter.hpp"
+#include "gausstrack/plant_sim/latency_recorder.hpp"
+#include "gausstrack/reference/literal_formulas.hpp"
+#include "gausstrack/tracking_controller.hpp"
+
+namespace gausstrack::bench {
+
+template <typename M>
+struct States {
+  static constexpr int kCount = 64;
+  using V = Eigen::Matrix<typename M::Scalar, M::kDof, 1>;
+  std::array<V, kCount> q, qd;
+  std::array<double, kCount> t;
+  States() {
+    std::mt19937_64 rng(1993);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int k = 0; k < kCount; ++k) {
+      for (int i = 0; i < M::kDof; ++i) {
+        q[k](i) = u(rng);
+        qd[k](i) = u(rng);
+      }
+      t[k] = 0.5 * (u(rng) + 1);
+    }
+  }
+};
+
+/// Runs `call(k)` for the benchmark loop, counting allocations, then times calls one by one.
+template <typename F>
+void measure(benchmark::State& state, F&& call) {
+  static plant_sim::LatencyRecorder ns(1 << 20);  // reserved once, outside every counted region
+  std::size_t k = 0;
+  support::start_counting_allocations();
+  for (auto _ : state) call(k++ & 63);
+  const long allocations = support::stop_counting_allocations();
+  ns.clear();
+  const std::size_t timed = std::clamp<std::size_t>(k, 1000, 100000);
+  for (std::size_t i = 0; i < timed; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    call(i & 63);
+    const auto t1 = std::chrono::steady_clock::now();
+    ns.add(static_cast<double>(std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count()));
+  }
+  state.counters["p50_ns"] = ns.quantile(0.5);
+  state.counters["p99_ns"] = ns.quantile(0.99);
+  state.counters["p999_ns"] = ns.quantile(0.999);
+  state.counters["max_ns"] = ns.max();
+  state.counters["allocs_per_call"] = static_cast<double>(allocations) / static_cast<double>(std::max<std::size_t>(k, 1));
+}
+
+inline const char* strategy_name(InverseStrategy s) {
+  switch (s) {
+    case InverseStrategy::kCholeskyWithFallback: return "cholesky";
+    case InverseStrategy::kSvd: return "svd";
+    case InverseStrategy::kCompleteOrthogonal: return "cod";
+    case InverseStrategy::kDampedLeastSquares: return "damped";
+  }
+  return "?";
+}
+
+template <typename M>
+void bench_law(benchmark::State& state, InverseStrategy strategy) {
+  static const States<M> s;
+  ControllerOptions<double> options;
+  options.solver.strategy = strategy;
+  options.solver.damping = 1e-9;
+  TrackingController<M> controller(M{}, options);
+  typename TrackingController<M>::Output out;
+  measure(state, [&](std::size_t k) {
+    benchmark::DoNotOptimize(controller.compute(s.q[k], s.qd[k], s.t[k], out));
+    benchmark::DoNotOptimize(out.force.data());
+  });
+}
+
+template <typename M>
+void bench_literal_fixed(benchmark::State& state) {
+  static const States<M> s;
+  const M model{};
+  measure(state, [&](std::size_t k) {
+    const auto& q = s.q[k];
+    const auto& qd = s.qd[k];
+    const double t = s.t[k];
+    const auto out = reference::literal_formulas<M::kDof, M::kConstraints, double>(
+        model.mass_matrix(q, t), model.nonlinear_force(q, qd, t), model.applied_force(q, qd, t),
+        model.constraint_matrix(q, t), model.constraint_rhs(q, qd, t));
+    benchmark::DoNotOptimize(out.constraint_force.data());
+  });
+}
+
+template <typename M>
+void bench_dynamic_user(benchmark::State& state) {
+  static const States<M> s;
+  const M model{};
+  measure(state, [&](std::size_t k) {
+    const auto& q = s.q[k];
+    const auto& qd = s.qd[k];
+    const double t = s.t[k];
+    const Eigen::MatrixXd A = model.mass_matrix(q, t);
+    const Eigen::VectorXd f = model.nonlinear_force(q, qd, t), Q = model.applied_force(q, qd, t);
+    const Eigen::MatrixXd D = model.constraint_matrix(q, t);
+    const Eigen::VectorXd g = model.constraint_rhs(q, qd, t);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(A);
+    const Eigen::MatrixXd a_half = eig.operatorSqrt();
+    const Eigen::MatrixXd a_minus_half = eig.operatorInverseSqrt();
+    const Eigen::VectorXd a = A.ldlt().solve(Q - f);
+    const Eigen::MatrixXd B = D * a_minus_half;
+    const Eigen::MatrixXd B_plus = B.completeOrthogonalDecomposition().pseudoInverse();
+    const Eigen::VectorXd force = a_half * (B_plus * (g - D * a));
+    benchmark::DoNotOptimize(force.data());
+  });
+}
+
+template <typename M>
+void bench_dynamic_kkt(benchmark::State& state) {
+  static const States<M> s;
+  const M model{};
+  constexpr int N = M::kDof, P = M::kConstraints;
+  measure(state, [&](std::size_t k) {
+    const auto& q = s.q[k];
+    const auto& qd = s.qd[k];
+    const double t = s.t[k];
+    const Eigen::MatrixXd A = model.mass_matrix(q, t);
+    const Eigen::MatrixXd D = model.constraint_matrix(q, t);
+    const Eigen::VectorXd impressed = model.applied_force(q, qd, t) - model.nonlinear_force(q, qd, t);
+    Eigen::MatrixXd K = Eigen::MatrixXd::Zero(N + P, N + P);
+    K.topLeftCorner(N, N) = A;
+    K.topRightCorner(N, P) = D.transpose();
+    K.bottomLeftCorner(P, N) = D;
+    Eigen::VectorXd rhs(N + P);
+    rhs << impressed, model.constraint_rhs(q, qd, t);
+    const Eigen::VectorXd x = K.partialPivLu().solve(rhs);
+    const Eigen::VectorXd force = A * x.head(N) - impressed;
+    benchmark::DoNotOptimize(force.data());
+  });
+}
+
+inline void bench_timer_overhead(benchmark::State& state) {
+  measure(state, [](std::size_t k) { benchmark::DoNotOptimize(k); });
+}
+
+/// Registers the law (every strategy) and the baselines for model M under `name`, e.g.
+/// "law/duffing_2x1/cholesky", "baseline/duffing_2x1/dynamic_kkt".
+template <typename M>
+void register_model(const std::string& name) {
+  const std::string size = name + "_" + std::to_string(M::kDof) + "x" + std::to_string(M::kConstraints);
+  for (InverseStrategy s : {InverseStrategy::kCholeskyWithFallback, InverseStrategy::kSvd,
+                            InverseStrategy::kCompleteOrthogonal, InverseStrategy::kDampedLeastSquares})
+    benchmark::RegisterBenchmark(("law/" + size + "/" + strategy_name(s)).c_str(),
+                                 [s](benchmark::State& st) { bench_law<M>(st, s); });
+  benchmark::RegisterBenchmark(("baseline/" + size + "/literal_fixed").c_str(), bench_literal_fixed<M>);
+  benchmark::RegisterBenchmark(("baseline/" + size + "/dynamic_user").c_str(), bench_dynamic_user<M>);
+  benchmark::RegisterBenchmark(("baseline/" + size + "/dynamic_kkt").c_str(), bench_dynamic_kkt<M>);
+}
+
+}  // namespace gausstrack::bench

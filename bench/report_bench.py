@@ -1,0 +1,172 @@
+#!/usr/bin/python3
+"""Summarizes the benchmark outputs in DIR (written by scripts/bench) as DIR/README.md: the
+control law per system and strategy beside its baselines, the targets as ratios from one run,
+how cost grows with N (fitted exponent), the plant step, the firmware loop, transport and the
+closed loop.
+
+usage: report_bench.py DIR
+"""
+import json
+import math
+import os
+import sys
+
+STRATEGIES = ("cholesky", "svd", "cod", "damped")
+BASELINES = ("literal_fixed", "dynamic_user", "dynamic_kkt", "closed_form")
+
+
+def load(d, name):
+    path = os.path.join(d, name)
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f)
+
+
+def benchmarks(doc):
+    """name -> (median real time [ns], counters) from a Google Benchmark JSON with repetitions."""
+    runs = {}
+    for b in doc["benchmarks"]:
+        name = b.get("run_name", b["name"])
+        if b.get("run_type") == "aggregate":
+            if b.get("aggregate_name") == "median":
+                runs.setdefault(name, {})["median"] = b
+            continue
+        runs.setdefault(name, {}).setdefault("iterations", []).append(b)
+    out = {}
+    for name, r in runs.items():
+        b = r.get("median") or r["iterations"][0]
+        scale = {"ns": 1, "us": 1e3, "ms": 1e6, "s": 1e9}[b.get("time_unit", "ns")]
+        it = r.get("iterations", [b])
+        counters = {k: sorted(x[k] for x in it)[len(it) // 2] for k in ("p50_ns", "p99_ns", "p999_ns", "max_ns",
+                                                                        "allocs_per_call") if k in it[0]}
+        counters["max_ns"] = max(x.get("max_ns", 0) for x in it)
+        out[name] = (b["real_time"] * scale, counters)
+    return out
+
+
+def ns(v):
+    return f"{v / 1e3:.2f} us" if v >= 1e4 else f"{v:.0f} ns"
+
+
+def main(d):
+    out = ["# Benchmarks", "", "Written by `scripts/bench`; every figure in a table comes from one run on the machine "
+           "that ran it, baselines included.", ""]
+    doc = load(d, "controller_bench.json")
+    if doc:
+        ctx = doc["context"]
+        out += [f"Machine: {ctx.get('num_cpus')} CPUs at {ctx.get('mhz_per_cpu')} MHz, "
+                f"{ctx.get('library_build_type', '')} Google Benchmark; timer overhead per timed call "
+                "(two clock reads) is the `timer_overhead` row.", ""]
+        b = benchmarks(doc)
+        models = []
+        for name in b:
+            parts = name.split("/")
+            if len(parts) == 3 and parts[1] not in models:
+                models.append(parts[1])
+        out += ["## Control law: one full evaluation (model terms + eq. 32)", "",
+                "Time is Google Benchmark's median over repetitions; p50/p99/p99.9/max come from calls timed one by "
+                "one (they include the timer's own cost); allocations are per call.", ""]
+        rows = []
+        for m in models:
+            for kind, names in (("law", STRATEGIES), ("baseline", BASELINES)):
+                for s in names:
+                    key = f"{kind}/{m}/{s}"
+                    if key in b:
+                        t, c = b[key]
+                        rows.append([m, f"{kind}: {s}", ns(t), ns(c.get("p50_ns", 0)), ns(c.get("p99_ns", 0)),
+                                     ns(c.get("p999_ns", 0)), ns(c.get("max_ns", 0)),
+                                     f"{c.get('allocs_per_call', 0):.0f}"])
+        if "baseline/timer_overhead" in b:
+            t, c = b["baseline/timer_overhead"]
+            rows.append(["-", "timer overhead", ns(t), ns(c["p50_ns"]), ns(c["p99_ns"]), ns(c["p999_ns"]),
+                         ns(c["max_ns"]), "0"])
+        out += ["| system | code | time | p50 | p99 | p99.9 | max | allocs |", "|---|---|---|---|---|---|---|---|"]
+        out += ["| " + " | ".join(r) + " |" for r in rows]
+
+        def t(key):
+            return b[key][0] if key in b else math.nan
+
+        out += ["", "### Targets (ratios from this run)", "",
+                "| target | system | measured | met |", "|---|---|---|---|"]
+
+        def target(label, m, value, ok):
+            out.append(f"| {label} | {m} | {value:.2f}x | {'yes' if ok else '**no**'} |")
+
+        target("Duffing law <= 1.5x its closed form", "duffing_2x1",
+               t("law/duffing_2x1/cholesky") / t("baseline/duffing_2x1/closed_form"),
+               t("law/duffing_2x1/cholesky") <= 1.5 * t("baseline/duffing_2x1/closed_form"))
+        for m in models:
+            lit = t(f"baseline/{m}/literal_fixed") / t(f"law/{m}/cholesky")
+            dyn = t(f"baseline/{m}/dynamic_user") / t(f"law/{m}/cholesky")
+            kkt = t(f"baseline/{m}/dynamic_kkt") / t(f"law/{m}/cholesky")
+            svd = t(f"law/{m}/svd") / t(f"law/{m}/cholesky")
+            cod = t(f"law/{m}/cod") / t(f"law/{m}/cholesky")
+            target("default >= 8x faster than literal fixed-size SVD", m, lit, lit >= 8)
+            target("default >= 15x faster than dynamic-size user code", m, dyn, dyn >= 15)
+            target("rank-revealing (SVD) <= 3x default", m, svd, svd <= 3)
+            target("rank-revealing (COD) <= 3x default", m, cod, cod <= 3)
+            out.append(f"| (no target) dynamic KKT / default | {m} | {kkt:.2f}x | - |")
+
+        chains = sorted(((int(m.split("_")[1].split("x")[0]), m) for m in models if m.startswith("chain_")))
+        if len(chains) >= 3:
+            out += ["", "### Growth with N (Duffing chains, P = N/2)", "",
+                    "Least-squares slope of log(time) against log(N), N = "
+                    + ", ".join(str(n) for n, _ in chains) + ":", ""]
+            for code in [f"law/{{}}/{s}" for s in STRATEGIES] + [f"baseline/{{}}/{s}" for s in BASELINES[:3]]:
+                xs = [math.log(n) for n, m in chains if code.format(m) in b]
+                ys = [math.log(t(code.format(m))) for n, m in chains if code.format(m) in b]
+                if len(xs) >= 3:
+                    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+                    slope = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
+                    out.append(f"- `{code.format('chain')}`: time ~ N^{slope:.2f}")
+        out.append("")
+
+    step = load(d, "step_cost_bench.json")
+    if step:
+        b = benchmarks(step)
+        out += ["## Plant step as effects are added", "", "| benchmark | time |", "|---|---|"]
+        out += [f"| {k} | {ns(v[0])} |" for k, v in b.items()]
+        out.append("")
+
+    fw = load(d, "firmware_loop.json")
+    if fw:
+        out += ["## Firmware-style loop", "",
+                f"{fw['iterations']} iterations at a {fw['period_us']} us period: sensor read, law, actuator "
+                "write (histogram in firmware_loop.txt).", "",
+                "| law | p50 | p99 | p99.9 | max | wake jitter p99 | allocations | max tracking error |",
+                "|---|---|---|---|---|---|---|---|"]
+        for k in ("closed_form", "gausstrack"):
+            r = fw[k]
+            lat, jit = r["latency_ns"], r["jitter_ns"]
+            out.append(f"| {k} | {ns(lat['p50'])} | {ns(lat['p99'])} | {ns(lat['p999'])} | {ns(lat['max'])} | "
+                       f"{ns(jit['p99'])} | {r['allocations']} | {r['max_tracking_error']:.2e} |")
+        out.append("")
+
+    tr = load(d, "transport.json")
+    loop = load(d, os.path.join("closed_loop", "summary.json"))
+    if tr:
+        out += ["## Transport: round trip between two processes", "",
+                f"State {tr['state_bytes']} bytes out, command {tr['command_bytes']} bytes back, "
+                f"{tr['round_trips']} round trips each.", "",
+                "| path | p50 | p99 | p99.9 | max |", "|---|---|---|---|---|"]
+        for k, label in (("udp_us", "raw UDP loopback (floor)"), ("lcm_us", "bare LCM, real message types")):
+            r = tr[k]
+            out.append(f"| {label} | {r['p50']:.1f} us | {r['p99']:.1f} us | {r['p999']:.1f} us | {r['max']:.1f} us |")
+        if loop:
+            r = loop["round_trip_us"]
+            out.append(f"| gausstrack-run closed loop, 1 kHz real time (state to command, with the law) | "
+                       f"{r['p50']:.1f} us | {r['p99']:.1f} us | {r['p999']:.1f} us | {r['max']:.1f} us |")
+        out.append("")
+
+    with open(os.path.join(d, "README.md"), "w") as f:
+        f.write("\n".join(out) + "\n")
+    print(os.path.join(d, "README.md"))
+    return 0
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        print(__doc__, file=sys.stderr)
+        sys.exit(2)
+    sys.exit(main(sys.argv[1]))

@@ -1,0 +1,201 @@
+// transport_bench [--round-trips N] [--lcm-url URL] [--out FILE.json]
+// Round trip between two processes on this machine, in one run:
+//   lcm  a plant_state_t published over LCM, answered by a child process that decodes it and
+//        publishes a control_command_t (both encoded into fixed buffers, as the real processes do);
+//   udp  raw UDP datagrams on loopback of the same sizes (the floor).
+// Prints p50/p99/p99.9/max of each and writes them as JSON.
+#include <arpa/inet.h>
+#include <lcm/lcm-cpp.hpp>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <array>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "gausstrack/control_command_t.hpp"
+#include "gausstrack/plant_sim/latency_recorder.hpp"
+#include "gausstrack/plant_state_t.hpp"
+
+namespace {
+
+using gausstrack::plant_sim::LatencyRecorder;
+
+std::int64_t now_ns() {
+  timespec t{};
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return static_cast<std::int64_t>(t.tv_sec) * 1000000000LL + t.tv_nsec;
+}
+
+const std::string kPing = "TRANSPORT_BENCH_STATE_" + std::to_string(getpid());
+const std::string kPong = "TRANSPORT_BENCH_COMMAND_" + std::to_string(getpid());
+
+// Child: answers every state with a command until told to stop (sequence < 0).
+struct Echo {
+  lcm::LCM* lcm;
+  gausstrack::plant_state_t state{};
+  gausstrack::control_command_t command{};
+  std::array<std::uint8_t, 4096> buffer{};
+  bool stop = false;
+  void on_state(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    if (state.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) return;
+    if (state.sequence < 0) {
+      stop = true;
+      return;
+    }
+    command.state_sequence = state.sequence;
+    command.dimension = state.dimension;
+    for (int i = 0; i < state.dimension; ++i) command.force[i] = -state.q[i];
+    const int size = command.getEncodedSize();
+    command.encode(buffer.data(), 0, size);
+    lcm->publish(kPong, buffer.data(), static_cast<unsigned>(size));
+  }
+};
+
+int lcm_echo(const std::string& url) {
+  lcm::LCM lcm(url);
+  if (!lcm.good()) return 1;
+  Echo echo{&lcm};
+  lcm.subscribe(kPing, &Echo::on_state, &echo);
+  const std::int64_t give_up = now_ns() + 120LL * 1000000000LL;
+  while (!echo.stop && now_ns() < give_up) lcm.handleTimeout(100);
+  return 0;
+}
+
+struct Pong {
+  std::int64_t answered = -1;
+  gausstrack::control_command_t command{};
+  void on_command(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    if (command.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) >= 0) answered = command.state_sequence;
+  }
+};
+
+bool lcm_round_trips(const std::string& url, long n, LatencyRecorder& rt_us, int& state_bytes, int& command_bytes) {
+  lcm::LCM lcm(url);
+  if (!lcm.good()) return false;
+  Pong pong;
+  lcm.subscribe(kPong, &Pong::on_command, &pong);
+  gausstrack::plant_state_t state{};
+  state.dimension = 2;
+  std::array<std::uint8_t, 4096> buffer{};
+  command_bytes = gausstrack::control_command_t{}.getEncodedSize();
+  auto send = [&](std::int64_t seq) {
+    state.sequence = seq;
+    state.q[0] = static_cast<double>(seq);
+    const int size = state.getEncodedSize();
+    state_bytes = size;
+    state.encode(buffer.data(), 0, size);
+    lcm.publish(kPing, buffer.data(), static_cast<unsigned>(size));
+  };
+  // Handshake: until the child answers (it may not have subscribed yet).
+  for (int tries = 0; pong.answered != 0; ++tries) {
+    if (tries > 100) return false;
+    send(0);
+    lcm.handleTimeout(50);
+  }
+  const long warmup = 1000;
+  for (long k = 1; k <= n + warmup; ++k) {
+    const std::int64_t t0 = now_ns();
+    send(k);
+    while (pong.answered != k)
+      if (lcm.handleTimeout(1000) <= 0) return false;
+    if (k > warmup) rt_us.add(static_cast<double>(now_ns() - t0) * 1e-3);
+  }
+  send(-1);
+  return true;
+}
+
+int udp_echo(int fd, int state_bytes, int command_bytes) {
+  std::vector<char> in(static_cast<std::size_t>(state_bytes) + 16), out(static_cast<std::size_t>(command_bytes));
+  for (;;) {
+    sockaddr_in from{};
+    socklen_t len = sizeof from;
+    const ssize_t got = recvfrom(fd, in.data(), in.size(), 0, reinterpret_cast<sockaddr*>(&from), &len);
+    if (got <= 0) return 1;
+    if (got == 1) return 0;  // stop
+    sendto(fd, out.data(), out.size(), 0, reinterpret_cast<sockaddr*>(&from), len);
+  }
+}
+
+bool udp_round_trips(long n, int state_bytes, int command_bytes, LatencyRecorder& rt_us) {
+  const int server = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t len = sizeof addr;
+  if (server < 0 || bind(server, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 ||
+      getsockname(server, reinterpret_cast<sockaddr*>(&addr), &len) != 0)
+    return false;
+  const pid_t child = fork();
+  if (child == 0) _exit(udp_echo(server, state_bytes, command_bytes));
+  close(server);
+  const int client = socket(AF_INET, SOCK_DGRAM, 0);
+  std::vector<char> out(static_cast<std::size_t>(state_bytes)), in(static_cast<std::size_t>(command_bytes) + 16);
+  pollfd p{client, POLLIN, 0};
+  bool ok = true;
+  for (long k = 0; k < n + 1000 && ok; ++k) {
+    const std::int64_t t0 = now_ns();
+    sendto(client, out.data(), out.size(), 0, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
+    ok = poll(&p, 1, 1000) == 1 && recv(client, in.data(), in.size(), 0) == command_bytes;
+    if (k >= 1000) rt_us.add(static_cast<double>(now_ns() - t0) * 1e-3);
+  }
+  sendto(client, out.data(), 1, 0, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
+  close(client);
+  int status = 0;
+  waitpid(child, &status, 0);
+  return ok;
+}
+
+void print(const char* name, const LatencyRecorder& r) {
+  std::printf("%-22s p50 %7.1f us  p99 %7.1f  p99.9 %7.1f  max %8.1f  (%zu round trips)\n", name, r.quantile(0.5),
+              r.quantile(0.99), r.quantile(0.999), r.max(), r.count());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  long n = 20000;
+  std::string url = "udpm://239.255.76.67:7671?ttl=0", out;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--round-trips" && i + 1 < argc) n = std::atol(argv[++i]);
+    else if (a == "--lcm-url" && i + 1 < argc) url = argv[++i];
+    else if (a == "--out" && i + 1 < argc) out = argv[++i];
+    else return std::fprintf(stderr, "usage: %s [--round-trips N] [--lcm-url URL] [--out FILE.json]\n", argv[0]), 2;
+  }
+  if (n <= 0) return std::fprintf(stderr, "error: --round-trips must be positive\n"), 2;
+  const auto capacity = static_cast<std::size_t>(n);
+  LatencyRecorder lcm_us(capacity), udp_us(capacity);
+  int state_bytes = 0, command_bytes = 0;
+
+  const pid_t child = fork();
+  if (child == 0) _exit(lcm_echo(url));
+  const bool lcm_ok = lcm_round_trips(url, n, lcm_us, state_bytes, command_bytes);
+  if (!lcm_ok) kill(child, SIGTERM);
+  int status = 0;
+  waitpid(child, &status, 0);
+  if (!lcm_ok) return std::fprintf(stderr, "error: LCM round trips failed on %s\n", url.c_str()), 1;
+  if (!udp_round_trips(n, state_bytes, command_bytes, udp_us))
+    return std::fprintf(stderr, "error: UDP loopback round trips failed\n"), 1;
+
+  std::printf("round trip between two processes on loopback: state %d bytes out, command %d bytes back\n",
+              state_bytes, command_bytes);
+  print("lcm (plant_state_t)", lcm_us);
+  print("raw udp (same sizes)", udp_us);
+  std::printf("lcm / udp at p50: %.2f\n", lcm_us.quantile(0.5) / udp_us.quantile(0.5));
+  if (!out.empty()) {
+    std::ofstream f(out);
+    f << "{\"round_trips\": " << n << ", \"state_bytes\": " << state_bytes << ", \"command_bytes\": " << command_bytes
+      << ", \"lcm_url\": \"" << url << "\", " << lcm_us.json("lcm_us") << ", " << udp_us.json("udp_us") << "}\n";
+    if (!f) return std::fprintf(stderr, "error: cannot write %s\n", out.c_str()), 1;
+  }
+  return 0;
+}
