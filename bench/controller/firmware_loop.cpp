@@ -53,7 +53,11 @@ void run_loop(long iterations, std::int64_t period_ns, Law&& law, LoopResult& r)
   gausstrack::support::start_counting_allocations();
   for (long k = 0; k < iterations; ++k) {
     const double t = static_cast<double>(k) * dt;
-    io.sensor[0] = q(0), io.sensor[1] = q(1), io.sensor[2] = qd(0), io.sensor[3] = qd(1), io.sensor[4] = t;
+    io.sensor[0] = q(0);
+    io.sensor[1] = q(1);
+    io.sensor[2] = qd(0);
+    io.sensor[3] = qd(1);
+    io.sensor[4] = t;
     while (now_ns() < deadline) {
     }
     const std::int64_t start = now_ns();
@@ -68,7 +72,8 @@ void run_loop(long iterations, std::int64_t period_ns, Law&& law, LoopResult& r)
     if (end > deadline) deadline = end + period_ns;  // overran: start the next period afresh
 
     // The plant over one period under the held force (semi-implicit Euler), outside the timing.
-    u << io.actuator[0], io.actuator[1];
+    u(0) = io.actuator[0];
+    u(1) = io.actuator[1];
     const Eigen::Vector2d a = (u - plant.nonlinear_force(q, qd, t)).cwiseQuotient(Eigen::Vector2d(plant.m1, plant.m2));
     qd += dt * a;
     q += dt * qd;

@@ -17,10 +17,13 @@ import argparse
 import json
 import os
 import signal
+import socket
+import struct
 import subprocess
 import sys
 import threading
 import time
+import urllib.parse
 
 HERE = os.path.dirname(os.path.realpath(__file__))
 
@@ -52,6 +55,34 @@ def parse(argv):
     if args.rate <= 0 or (args.duration is not None and args.duration <= 0):
         p.error("--rate and --duration must be positive")
     return args
+
+
+def wait_for_logger(url, channel, log_path, timeout=5.0):
+    """lcm-logger says nothing when it has subscribed: publish a probe message (LCM's UDP
+    multicast wire format: magic "LC02", sequence number, NUL-terminated channel, payload) until
+    the log file shows it. Other transports are given a moment instead."""
+    url = url or os.environ.get("LCM_DEFAULT_URL") or "udpm://239.255.76.67:7667?ttl=0"
+    parsed = urllib.parse.urlparse(url)
+    if parsed.scheme != "udpm":
+        time.sleep(0.5)
+        return True
+    ttl = int(urllib.parse.parse_qs(parsed.query).get("ttl", ["0"])[0])
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_TTL, ttl)
+    sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_LOOP, 1)
+    deadline = time.monotonic() + timeout
+    seq = 0
+    try:
+        while time.monotonic() < deadline:
+            packet = struct.pack(">II", 0x4C433032, seq) + channel.encode() + b"\0" + b"probe"
+            sock.sendto(packet, (parsed.hostname, parsed.port or 7667))
+            seq += 1
+            time.sleep(0.05)
+            if os.path.exists(log_path) and os.path.getsize(log_path) > 0:
+                return True
+        return False
+    finally:
+        sock.close()
 
 
 class Process:
@@ -119,13 +150,21 @@ def main(argv):
 
     logger = None
     if args.log:
-        cmd = ["lcm-logger", "-f", "-q", "-c", f"{prefix}_.*", args.log]
-        if args.lcm_url:
-            cmd.insert(1, f"--lcm-url={args.lcm_url}")
+        if os.path.exists(args.log):
+            os.remove(args.log)
+        cmd = ["lcm-logger", "-f", "-q", "--flush-interval=10", "-c", f"{prefix}_.*", args.log]
+        # A lock-step run publishes as fast as the loop turns: give the logger's socket a large
+        # receive buffer (the kernel caps it at net.core.rmem_max) so that a busy machine does
+        # not make it drop messages.
+        url = args.lcm_url or os.environ.get("LCM_DEFAULT_URL") or "udpm://239.255.76.67:7667?ttl=0"
+        if url.startswith("udpm://") and "recv_buf_size" not in url:
+            url += ("&" if "?" in url else "?") + "recv_buf_size=16777216"
+        cmd.insert(1, f"--lcm-url={url}")
         logger = subprocess.Popen(cmd, stdout=subprocess.DEVNULL)
-        time.sleep(0.3)  # lcm-logger has no ready signal; let it subscribe before the first state
-        if logger.poll() is not None:
-            sys.exit(f"gausstrack-run: lcm-logger exited with status {logger.returncode}")
+        ready = wait_for_logger(args.lcm_url, f"{prefix}_LOG_PROBE", args.log)
+        if logger.poll() is not None or not ready:
+            logger.kill()
+            sys.exit(f"gausstrack-run: lcm-logger did not start recording {args.log}")
 
     controller = Process("gausstrack-controller",
                          [tool("gausstrack-controller")] + common + rt_controller +
