@@ -55,9 +55,8 @@ def main(d):
     doc = load(d, "controller_bench.json")
     if doc:
         ctx = doc["context"]
-        out += [f"Machine: {ctx.get('num_cpus')} CPUs at {ctx.get('mhz_per_cpu')} MHz, "
-                f"{ctx.get('library_build_type', '')} Google Benchmark; timer overhead per timed call "
-                "(two clock reads) is the `timer_overhead` row.", ""]
+        out += [f"Machine: {ctx.get('num_cpus')} CPUs at {ctx.get('mhz_per_cpu')} MHz; the timer's own cost per "
+                "timed call (two clock reads) is the `timer_overhead` row.", ""]
         b = benchmarks(doc)
         models = []
         for name in b:
@@ -125,7 +124,9 @@ def main(d):
     step = load(d, "step_cost_bench.json")
     if step:
         b = benchmarks(step)
-        out += ["## Plant step as effects are added", "", "| benchmark | time |", "|---|---|"]
+        out += ["## Plant step as effects are added", "",
+                "1000 RK4 steps (4 right-hand-side evaluations each) of the Duffing plant with the first k effects "
+                "of eq. (35) and more (`BM_PlantStep/k`); no controller.", "", "| benchmark | time |", "|---|---|"]
         out += [f"| {k} | {ns(v[0])} |" for k, v in b.items()]
         out.append("")
 

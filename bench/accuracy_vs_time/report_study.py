@@ -136,7 +136,8 @@ def main(d):
     # Strategies.
     st = rows(d, "strategies.csv")
     out += ["## Generalized-inverse strategies and damping", "",
-            "6 x 3 constraint sets; force error relative to a long-double KKT solve of the independent rows; "
+            "6 x 3 constraint sets; force error relative to a manufactured exact solution (q'' and the multipliers "
+            "chosen first, then g and Q - f built from them); "
             "residual ||D q'' - g||; warnings are `gausstrack::warning` flags (1 rank deficient, 2 constraints "
             "not met, 4 ill-conditioned, 8 fell back to SVD).", ""]
     out.append(table(["case", "strategy", "damping", "force error", "residual", "||Q'||", "ns per call",

@@ -178,26 +178,23 @@ class ConstraintSolver {
     if (mass_llt_.info() != Eigen::Success) return fail(out, Status::kMassMatrixNotPositiveDefinite);
 
     // a = A^-1 (Q - f);  B^T = L^-1 D^T.
-    VectorN a = Q - f;
-    lower_solve_in_place(a);
-    lower_transposed_solve_in_place(a);
-    out.unconstrained_acceleration = a;
+    out.unconstrained_acceleration = mass_llt_.solve(Q - f);
     bt_ = D.transpose();
-    lower_solve_in_place(bt_);
+    mass_llt_.matrixL().solveInPlace(bt_);
 
     // Right sides of the two eq. (32) terms, solved together.
     Eigen::Matrix<Scalar, P, 2> rhs;
-    rhs.col(0).noalias() = -(D.lazyProduct(out.unconstrained_acceleration));
+    rhs.col(0).noalias() = -(D * out.unconstrained_acceleration);
     rhs.col(1) = g;
     factorize(diag);
     Eigen::Matrix<Scalar, N, 2> y;
     apply_pseudo_inverse(rhs, y);
 
-    out.force_from_impressed = lower_times(y.col(0));
-    out.force_from_rhs = lower_times(y.col(1));
+    out.force_from_impressed.noalias() = mass_llt_.matrixL() * y.col(0);
+    out.force_from_rhs.noalias() = mass_llt_.matrixL() * y.col(1);
     out.constraint_force = out.force_from_impressed + out.force_from_rhs;
     VectorN dq = y.col(0) + y.col(1);
-    lower_transposed_solve_in_place(dq);  // L^-T y
+    mass_llt_.matrixU().solveInPlace(dq);  // L^-T y
     out.acceleration = out.unconstrained_acceleration + dq;
 
     if (!out.acceleration.allFinite() || !out.constraint_force.allFinite() ||
@@ -222,43 +219,10 @@ class ConstraintSolver {
     if (!ready_) return VectorN::Zero();
     VectorN y;
     apply_pseudo_inverse(rhs, y);
-    return lower_times(y);
+    return mass_llt_.matrixL() * y;
   }
 
  private:
-  // Triangular solves and products with the mass matrix's Cholesky factor L, written as plain
-  // substitution loops: for these fixed small sizes Eigen dispatches to its blocked kernels,
-  // which cost several times more.
-  template <typename Derived>
-  void lower_solve_in_place(Eigen::MatrixBase<Derived>& x) const noexcept {  // x <- L^-1 x
-    const MatrixNN& l = mass_llt_.matrixLLT();
-    for (Eigen::Index c = 0; c < x.cols(); ++c)
-      for (int i = 0; i < N; ++i) {
-        Scalar s = x(i, c);
-        for (int k = 0; k < i; ++k) s -= l(i, k) * x(k, c);
-        x(i, c) = s / l(i, i);
-      }
-  }
-  void lower_transposed_solve_in_place(VectorN& x) const noexcept {  // x <- L^-T x
-    const MatrixNN& l = mass_llt_.matrixLLT();
-    for (int i = N - 1; i >= 0; --i) {
-      Scalar s = x(i);
-      for (int k = i + 1; k < N; ++k) s -= l(k, i) * x(k);
-      x(i) = s / l(i, i);
-    }
-  }
-  template <typename Derived>
-  VectorN lower_times(const Eigen::MatrixBase<Derived>& y) const noexcept {  // L y
-    const MatrixNN& l = mass_llt_.matrixLLT();
-    VectorN out;
-    for (int i = 0; i < N; ++i) {
-      Scalar s = 0;
-      for (int k = 0; k <= i; ++k) s += l(i, k) * y(k);
-      out(i) = s;
-    }
-    return out;
-  }
-
   Status fail(Solution& out, Status status) noexcept {
     const VectorN zero = VectorN::Zero();
     out.acceleration = zero;
@@ -298,12 +262,12 @@ class ConstraintSolver {
   // LLT of B B^T + lambda2 I = D A^-1 D^T + lambda2 I. Returns false when it is not usable.
   bool factorize_normal_equations(Scalar lambda2, bool require_well_conditioned,
                                   SolveDiagnostics<Scalar>& diag) noexcept {
-    MatrixPP gram = bt_.transpose().lazyProduct(bt_);
+    MatrixPP gram;
+    gram.noalias() = bt_.transpose() * bt_;
     gram.diagonal().array() += lambda2;
     gram_llt_.compute(gram);
     if (gram_llt_.info() != Eigen::Success) return false;
-    // A 1 x 1 matrix has condition 1 (Eigen's estimator would say so, at some cost).
-    const Scalar rcond = P == 1 ? Scalar(1) : gram_llt_.rcond();
+    const Scalar rcond = gram_llt_.rcond();
     if (require_well_conditioned && !(rcond >= options_.fallback_rcond)) return false;
     if (!(rcond > Scalar(0))) return false;
     used_ = options_.strategy;
@@ -377,7 +341,7 @@ class ConstraintSolver {
       case InverseStrategy::kDampedLeastSquares: {
         Eigen::Matrix<Scalar, P, K> w = r;
         gram_llt_.solveInPlace(w);
-        y = bt_.lazyProduct(w);
+        y.noalias() = bt_ * w;
         return;
       }
       case InverseStrategy::kSvd: {
