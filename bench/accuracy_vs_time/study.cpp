@@ -135,11 +135,10 @@ void integrators(const std::vector<fs::path>& scenes, std::ofstream& csv, bool q
 
 // The Duffing tracking task as one ODE: plant x'' = A^-1 (Q' - f) with Q' from the library.
 struct DuffingTask {
-  systems::CoupledDuffing<double> model;
   TrackingController<systems::CoupledDuffing<double>> controller;
   TrackingController<systems::CoupledDuffing<double>>::Output out;
   long evaluations = 0;
-  explicit DuffingTask(double alpha) : controller(make_model(alpha)) { model = make_model(alpha); }
+  explicit DuffingTask(double alpha) : controller(make_model(alpha)) {}
   static systems::CoupledDuffing<double> make_model(double alpha) {
     systems::CoupledDuffing<double> m;
     m.trajectory.alpha = alpha;
@@ -147,6 +146,7 @@ struct DuffingTask {
   }
   void rhs(const double* x, double* dx, double t) {
     ++evaluations;
+    const auto& model = controller.model();
     const Eigen::Vector2d q(x[0], x[1]), qd(x[2], x[3]);
     controller.compute(q, qd, t, out);
     const Eigen::Vector2d f = model.nonlinear_force(q, qd, t);
@@ -155,7 +155,7 @@ struct DuffingTask {
     dx[2] = (out.force(0) - f(0)) / model.m1;
     dx[3] = (out.force(1) - f(1)) / model.m2;
   }
-  Eigen::Vector4d initial() const { return {1.0, 1.0, model.consistent_x1_velocity(2.0), 2.0}; }
+  Eigen::Vector4d initial() const { return {1.0, 1.0, controller.model().consistent_x1_velocity(2.0), 2.0}; }
 };
 
 int arkode_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {

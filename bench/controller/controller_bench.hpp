@@ -72,15 +72,20 @@ void measure(benchmark::State& state, F&& call) {
   state.counters["allocs_per_call"] = static_cast<double>(allocations) / static_cast<double>(std::max<std::size_t>(k, 1));
 }
 
-inline const char* strategy_name(InverseStrategy s) {
-  switch (s) {
-    case InverseStrategy::kCholeskyWithFallback: return "cholesky";
-    case InverseStrategy::kSvd: return "svd";
-    case InverseStrategy::kCompleteOrthogonal: return "cod";
-    case InverseStrategy::kDampedLeastSquares: return "damped";
-  }
-  return "?";
-}
+/// The model's terms of eq. (32) at one of the benchmark states, as the baselines take them.
+template <typename M>
+struct ModelTerms {
+  Eigen::Matrix<double, M::kDof, M::kDof> A;
+  Eigen::Matrix<double, M::kDof, 1> f, Q;
+  Eigen::Matrix<double, M::kConstraints, M::kDof> D;
+  Eigen::Matrix<double, M::kConstraints, 1> g;
+  ModelTerms(const M& m, const States<M>& s, std::size_t k)
+      : A(m.mass_matrix(s.q[k], s.t[k])),
+        f(m.nonlinear_force(s.q[k], s.qd[k], s.t[k])),
+        Q(m.applied_force(s.q[k], s.qd[k], s.t[k])),
+        D(m.constraint_matrix(s.q[k], s.t[k])),
+        g(m.constraint_rhs(s.q[k], s.qd[k], s.t[k])) {}
+};
 
 template <typename M>
 void bench_law(benchmark::State& state, InverseStrategy strategy) {
@@ -101,12 +106,8 @@ void bench_literal_fixed(benchmark::State& state) {
   static const States<M> s;
   const M model{};
   measure(state, [&](std::size_t k) {
-    const auto& q = s.q[k];
-    const auto& qd = s.qd[k];
-    const double t = s.t[k];
-    const auto out = reference::literal_formulas<M::kDof, M::kConstraints, double>(
-        model.mass_matrix(q, t), model.nonlinear_force(q, qd, t), model.applied_force(q, qd, t),
-        model.constraint_matrix(q, t), model.constraint_rhs(q, qd, t));
+    const ModelTerms<M> m(model, s, k);
+    const auto out = reference::literal_formulas<M::kDof, M::kConstraints, double>(m.A, m.f, m.Q, m.D, m.g);
     benchmark::DoNotOptimize(out.constraint_force.data());
   });
 }
@@ -116,13 +117,9 @@ void bench_dynamic_user(benchmark::State& state) {
   static const States<M> s;
   const M model{};
   measure(state, [&](std::size_t k) {
-    const auto& q = s.q[k];
-    const auto& qd = s.qd[k];
-    const double t = s.t[k];
-    const Eigen::MatrixXd A = model.mass_matrix(q, t);
-    const Eigen::VectorXd f = model.nonlinear_force(q, qd, t), Q = model.applied_force(q, qd, t);
-    const Eigen::MatrixXd D = model.constraint_matrix(q, t);
-    const Eigen::VectorXd g = model.constraint_rhs(q, qd, t);
+    const ModelTerms<M> m(model, s, k);
+    const Eigen::MatrixXd A = m.A, D = m.D;
+    const Eigen::VectorXd f = m.f, Q = m.Q, g = m.g;
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(A);
     const Eigen::MatrixXd a_half = eig.operatorSqrt();
     const Eigen::MatrixXd a_minus_half = eig.operatorInverseSqrt();
@@ -140,18 +137,15 @@ void bench_dynamic_kkt(benchmark::State& state) {
   const M model{};
   constexpr int N = M::kDof, P = M::kConstraints;
   measure(state, [&](std::size_t k) {
-    const auto& q = s.q[k];
-    const auto& qd = s.qd[k];
-    const double t = s.t[k];
-    const Eigen::MatrixXd A = model.mass_matrix(q, t);
-    const Eigen::MatrixXd D = model.constraint_matrix(q, t);
-    const Eigen::VectorXd impressed = model.applied_force(q, qd, t) - model.nonlinear_force(q, qd, t);
+    const ModelTerms<M> m(model, s, k);
+    const Eigen::MatrixXd A = m.A, D = m.D;
+    const Eigen::VectorXd impressed = m.Q - m.f;
     Eigen::MatrixXd K = Eigen::MatrixXd::Zero(N + P, N + P);
     K.topLeftCorner(N, N) = A;
     K.topRightCorner(N, P) = D.transpose();
     K.bottomLeftCorner(P, N) = D;
     Eigen::VectorXd rhs(N + P);
-    rhs << impressed, model.constraint_rhs(q, qd, t);
+    rhs << impressed, m.g;
     const Eigen::VectorXd x = K.partialPivLu().solve(rhs);
     const Eigen::VectorXd force = A * x.head(N) - impressed;
     benchmark::DoNotOptimize(force.data());
@@ -169,7 +163,7 @@ void register_model(const std::string& name) {
   const std::string size = name + "_" + std::to_string(M::kDof) + "x" + std::to_string(M::kConstraints);
   for (InverseStrategy s : {InverseStrategy::kCholeskyWithFallback, InverseStrategy::kSvd,
                             InverseStrategy::kCompleteOrthogonal, InverseStrategy::kDampedLeastSquares})
-    benchmark::RegisterBenchmark(("law/" + size + "/" + strategy_name(s)).c_str(),
+    benchmark::RegisterBenchmark(("law/" + size + "/" + to_string(s)).c_str(),
                                  [s](benchmark::State& st) { bench_law<M>(st, s); });
   benchmark::RegisterBenchmark(("baseline/" + size + "/literal_fixed").c_str(), bench_literal_fixed<M>);
   benchmark::RegisterBenchmark(("baseline/" + size + "/dynamic_user").c_str(), bench_dynamic_user<M>);

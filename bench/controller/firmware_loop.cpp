@@ -15,6 +15,7 @@
 #include <string>
 
 #include "allocation_counter.hpp"
+#include "duffing_closed_form.hpp"
 #include "gausstrack/plant_sim/latency_recorder.hpp"
 #include "gausstrack/systems/coupled_duffing.hpp"
 #include "gausstrack/tracking_controller.hpp"
@@ -129,13 +130,10 @@ int main(int argc, char** argv) {
   const auto period_ns = static_cast<std::int64_t>(std::llround(period_us * 1e3));
   const auto n = static_cast<std::size_t>(iterations);
 
-  // Closed form (the floor): Q' = (r, -r) / (1/m1 + 1/m2), r = s'' - (a1 - a2).
   const Duffing m{};
   LoopResult closed(n), library(n);
   run_loop(iterations, period_ns, [&](const Eigen::Vector2d& q, const Eigen::Vector2d& qd, double t) {
-    const Eigen::Vector2d f = m.nonlinear_force(q, qd, t);
-    const double r = (m.trajectory.acceleration(t) + f(0) / m.m1 - f(1) / m.m2) / (1 / m.m1 + 1 / m.m2);
-    return Eigen::Vector2d(r, -r);
+    return gausstrack::bench::duffing_closed_form_force(m, q, qd, t);
   }, closed);
 
   gausstrack::TrackingController<Duffing> controller;

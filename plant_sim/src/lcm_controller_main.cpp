@@ -17,6 +17,7 @@
 
 #include "gausstrack/control_command_t.hpp"
 #include "gausstrack/loop_stats_t.hpp"
+#include "gausstrack/plant_sim/latency_recorder.hpp"
 #include "gausstrack/plant_sim/scene.hpp"
 #include "gausstrack/plant_sim/scene_controller.hpp"
 #include "gausstrack/plant_state_t.hpp"
@@ -28,8 +29,12 @@ using namespace gausstrack::plant_sim;
 
 class ControllerNode {
  public:
-  ControllerNode(lcm::LCM& lcm, SceneController controller, std::string command_channel)
-      : lcm_(lcm), controller_(std::move(controller)), command_channel_(std::move(command_channel)) {}
+  /// `periods`: how many compute times to keep for the percentiles (later ones are counted only).
+  ControllerNode(lcm::LCM& lcm, SceneController controller, std::string command_channel, std::size_t periods)
+      : lcm_(lcm),
+        controller_(std::move(controller)),
+        command_channel_(std::move(command_channel)),
+        compute_ns_(periods) {}
 
   void on_state(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     if (state_.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0 || !valid(state_)) {
@@ -83,7 +88,7 @@ class ControllerNode {
   std::int64_t last_sequence_ = -1;
   long rejected_ = 0;
   long published_ = 0;
-  LatencyRecorder compute_ns_{1u << 22};  // about 70 min at 1 kHz
+  LatencyRecorder compute_ns_;
 };
 
 int usage(const char* argv0) {
@@ -113,7 +118,11 @@ int main(int argc, char** argv) {
       throw SceneError(options.scene_path + ": the scene has no tracking section to control");
     lcm::LCM lcm(options.lcm_url);  // empty: LCM_DEFAULT_URL or LCM's own default
     if (!lcm.good()) return std::fprintf(stderr, "error: cannot open LCM (%s)\n", options.lcm_url.c_str()), 1;
-    ControllerNode node(lcm, make_scene_controller(scene.tracking), options.command_channel);
+    // One compute time per control period of the scene's run (and some to spare for restarts).
+    const std::size_t periods = scene.control_mode == ControlMode::kSampled
+                                    ? static_cast<std::size_t>(std::ceil(scene.duration * scene.control_rate)) + 1024
+                                    : std::size_t{1} << 16;
+    ControllerNode node(lcm, make_scene_controller(scene.tracking), options.command_channel, periods);
     lcm.subscribe(options.state_channel, &ControllerNode::on_state, &node);
     stop_on_signals();
     apply_realtime(options, "gausstrack-controller");

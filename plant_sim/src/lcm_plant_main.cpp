@@ -15,6 +15,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <poll.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -24,6 +25,7 @@
 
 #include "gausstrack/control_command_t.hpp"
 #include "gausstrack/loop_stats_t.hpp"
+#include "gausstrack/plant_sim/latency_recorder.hpp"
 #include "gausstrack/plant_sim/scene.hpp"
 #include "gausstrack/plant_sim/simulation.hpp"
 #include "gausstrack/plant_state_t.hpp"

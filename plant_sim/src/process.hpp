@@ -6,9 +6,7 @@
 #include <sys/mman.h>
 #include <time.h>
 
-#include <algorithm>
 #include <cerrno>
-#include <cmath>
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
@@ -16,8 +14,6 @@
 #include <cstring>
 #include <string>
 #include <vector>
-
-#include "gausstrack/plant_sim/latency_recorder.hpp"
 
 namespace gausstrack::plant_sim {
 
