@@ -149,7 +149,7 @@ struct DuffingTask {
     const auto& model = controller.model();
     const Eigen::Vector2d q(x[0], x[1]), qd(x[2], x[3]);
     controller.compute(q, qd, t, out);
-    const Eigen::Vector2d f = model.nonlinear_force(q, qd, t);
+    const Eigen::Vector2d f = model.spring_damper_force(q, qd);
     dx[0] = x[2];
     dx[1] = x[3];
     dx[2] = (out.force(0) - f(0)) / model.m1;

@@ -72,19 +72,23 @@ void measure(benchmark::State& state, F&& call) {
   state.counters["allocs_per_call"] = static_cast<double>(allocations) / static_cast<double>(std::max<std::size_t>(k, 1));
 }
 
-/// The model's terms of eq. (32) at one of the benchmark states, as the baselines take them.
+/// The model's terms of eq. (32) at one of the benchmark states (one evaluate_model, as the law
+/// does), as the baselines take them.
 template <typename M>
-struct ModelTerms {
+struct BaselineTerms {
   Eigen::Matrix<double, M::kDof, M::kDof> A;
   Eigen::Matrix<double, M::kDof, 1> f, Q;
   Eigen::Matrix<double, M::kConstraints, M::kDof> D;
   Eigen::Matrix<double, M::kConstraints, 1> g;
-  ModelTerms(const M& m, const States<M>& s, std::size_t k)
-      : A(m.mass_matrix(s.q[k], s.t[k])),
-        f(m.nonlinear_force(s.q[k], s.qd[k], s.t[k])),
-        Q(m.applied_force(s.q[k], s.qd[k], s.t[k])),
-        D(m.constraint_matrix(s.q[k], s.t[k])),
-        g(m.constraint_rhs(s.q[k], s.qd[k], s.t[k])) {}
+  BaselineTerms(const M& m, const States<M>& s, std::size_t k) {
+    TermsOf<M> t;
+    evaluate_model(m, s.q[k], s.qd[k], s.t[k], t);
+    A = t.mass_matrix;
+    f = t.nonlinear_force;
+    Q = t.applied_force;
+    D = t.constraint_matrix;
+    g = t.constraint_rhs;
+  }
 };
 
 template <typename M>
@@ -106,7 +110,7 @@ void bench_literal_fixed(benchmark::State& state) {
   static const States<M> s;
   const M model{};
   measure(state, [&](std::size_t k) {
-    const ModelTerms<M> m(model, s, k);
+    const BaselineTerms<M> m(model, s, k);
     const auto out = reference::literal_formulas<M::kDof, M::kConstraints, double>(m.A, m.f, m.Q, m.D, m.g);
     benchmark::DoNotOptimize(out.constraint_force.data());
   });
@@ -117,7 +121,7 @@ void bench_dynamic_user(benchmark::State& state) {
   static const States<M> s;
   const M model{};
   measure(state, [&](std::size_t k) {
-    const ModelTerms<M> m(model, s, k);
+    const BaselineTerms<M> m(model, s, k);
     const Eigen::MatrixXd A = m.A, D = m.D;
     const Eigen::VectorXd f = m.f, Q = m.Q, g = m.g;
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(A);
@@ -137,7 +141,7 @@ void bench_dynamic_kkt(benchmark::State& state) {
   const M model{};
   constexpr int N = M::kDof, P = M::kConstraints;
   measure(state, [&](std::size_t k) {
-    const ModelTerms<M> m(model, s, k);
+    const BaselineTerms<M> m(model, s, k);
     const Eigen::MatrixXd A = m.A, D = m.D;
     const Eigen::VectorXd impressed = m.Q - m.f;
     Eigen::MatrixXd K = Eigen::MatrixXd::Zero(N + P, N + P);

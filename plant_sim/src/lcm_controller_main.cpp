@@ -21,6 +21,7 @@
 #include "gausstrack/plant_sim/scene.hpp"
 #include "gausstrack/plant_sim/scene_controller.hpp"
 #include "gausstrack/plant_state_t.hpp"
+#include "message_log.hpp"
 #include "process.hpp"
 
 namespace {
@@ -30,11 +31,8 @@ using namespace gausstrack::plant_sim;
 class ControllerNode {
  public:
   /// `periods`: how many compute times to keep for the percentiles (later ones are counted only).
-  ControllerNode(lcm::LCM& lcm, SceneController controller, std::string command_channel, std::size_t periods)
-      : lcm_(lcm),
-        controller_(std::move(controller)),
-        command_channel_(std::move(command_channel)),
-        compute_ns_(periods) {}
+  ControllerNode(Outbox& commands, SceneController controller, std::size_t periods)
+      : commands_(commands), controller_(std::move(controller)), compute_ns_(periods) {}
 
   void on_state(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     if (state_.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0 || !valid(state_)) {
@@ -63,7 +61,7 @@ class ControllerNode {
     command_.compute_ns = compute_ns;
     const int size = command_.getEncodedSize();
     if (size > static_cast<int>(buffer_.size()) || command_.encode(buffer_.data(), 0, size) != size) return;
-    lcm_.publish(command_channel_, buffer_.data(), static_cast<unsigned>(size));
+    commands_.publish(buffer_.data(), static_cast<std::size_t>(size), command_.utime);
   }
 
   long rejected() const { return rejected_; }
@@ -78,10 +76,9 @@ class ControllerNode {
     return true;
   }
 
-  lcm::LCM& lcm_;
+  Outbox& commands_;
   SceneController controller_;
   SceneController::Output out_;
-  std::string command_channel_;
   gausstrack::plant_state_t state_{};
   gausstrack::control_command_t command_{};
   std::array<std::uint8_t, 4096> buffer_{};
@@ -122,7 +119,10 @@ int main(int argc, char** argv) {
     const std::size_t periods = scene.control_mode == ControlMode::kSampled
                                     ? static_cast<std::size_t>(std::ceil(scene.duration * scene.control_rate)) + 1024
                                     : std::size_t{1} << 16;
-    ControllerNode node(lcm, make_scene_controller(scene.tracking), options.command_channel, periods);
+    const auto log = open_message_log(options.log_path);
+    Outbox command_out(lcm, options.command_channel, log.get(), options.log_wait);
+    Outbox stats_outbox(lcm, options.stats_channel, log.get(), true);
+    ControllerNode node(command_out, make_scene_controller(scene.tracking), periods);
     lcm.subscribe(options.state_channel, &ControllerNode::on_state, &node);
     stop_on_signals();
     apply_realtime(options, "gausstrack-controller");
@@ -138,11 +138,19 @@ int main(int argc, char** argv) {
     stats.compute_ns_p50 = node.compute_ns().quantile(0.5);
     stats.compute_ns_p99 = node.compute_ns().quantile(0.99);
     stats.compute_ns_max = node.compute_ns().max();
-    lcm.publish(options.stats_channel, &stats);
+    stats_outbox.publish_message(stats);
+    long log_dropped = 0;
+    if (log) {
+      log->close();
+      log_dropped = log->dropped();
+      if (log_dropped > 0)
+        std::fprintf(stderr, "gausstrack-controller: warning: %ld messages could not be logged to %s\n",
+                     log_dropped, options.log_path.c_str());
+    }
     if (!stats_out.empty()) {
       std::ofstream out(stats_out);
       out << "{\"process\": \"controller\", \"commands_published\": " << node.published()
-          << ", \"messages_rejected\": " << node.rejected() << ", " << node.compute_ns().json("compute_ns") << "}\n";
+          << ", \"messages_rejected\": " << node.rejected() << ", \"log_dropped\": " << log_dropped << ", " << node.compute_ns().json("compute_ns") << "}\n";
       if (!out) return std::fprintf(stderr, "error: cannot write %s\n", stats_out.c_str()), 1;
     }
     std::printf("gausstrack-controller: %ld commands published, %ld messages rejected, compute p50 %.0f ns, "

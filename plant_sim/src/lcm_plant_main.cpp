@@ -29,6 +29,7 @@
 #include "gausstrack/plant_sim/scene.hpp"
 #include "gausstrack/plant_sim/simulation.hpp"
 #include "gausstrack/plant_state_t.hpp"
+#include "message_log.hpp"
 #include "process.hpp"
 
 namespace {
@@ -163,6 +164,10 @@ int main(int argc, char** argv) {
     CommandInbox inbox(n, periods);
     inbox.set_exact(lockstep);
     lcm.subscribe(options.command_channel, &CommandInbox::on_command, &inbox);
+    // Lock-step is not real time: its log waits for the disk rather than drop a message.
+    const auto log = open_message_log(options.log_path);
+    Outbox state_out(lcm, options.state_channel, log.get(), lockstep || options.log_wait);
+    Outbox stats_out(lcm, options.stats_channel, log.get(), true);
     stop_on_signals();
     apply_realtime(options, "gausstrack-plant");
 
@@ -194,7 +199,7 @@ int main(int argc, char** argv) {
         const int size = state.getEncodedSize();
         state.encode(buffer.data(), 0, size);
         inbox.published(period, monotonic_ns());
-        lcm.publish(options.state_channel, buffer.data(), static_cast<unsigned>(size));
+        state_out.publish(buffer.data(), static_cast<std::size_t>(size), state.utime);
         ++published;
       };
       if (!lockstep) {
@@ -264,7 +269,15 @@ int main(int argc, char** argv) {
     stats.compute_ns_max = inbox.compute_ns().max();
     stats.wake_late_us_p99 = wake_late_us.quantile(0.99);
     stats.wake_late_us_max = wake_late_us.max();
-    lcm.publish(options.stats_channel, &stats);
+    stats_out.publish_message(stats);
+    long log_dropped = 0;
+    if (log) {
+      log->close();
+      log_dropped = log->dropped();
+      if (log_dropped > 0)
+        std::fprintf(stderr, "gausstrack-plant: warning: %ld messages could not be logged to %s\n", log_dropped,
+                     options.log_path.c_str());
+    }
 
     std::filesystem::create_directories(out_dir);
     write_trajectory_csv(scene, result, out_dir + "/trajectory.csv");
@@ -274,7 +287,8 @@ int main(int argc, char** argv) {
         ", \"commands_applied\": " + std::to_string(applied) + ", \"commands_missing\": " + std::to_string(missing) +
         ", \"commands_late\": " + std::to_string(inbox.late()) + ", \"deadline_misses\": " +
         std::to_string(deadline_misses) + ", \"messages_rejected\": " + std::to_string(inbox.rejected()) +
-        ", \"watchdog_trips\": " + std::to_string(watchdog_trips) + ",\n  " + inbox.round_trip_us().json("round_trip_us") +
+        ", \"watchdog_trips\": " + std::to_string(watchdog_trips) +
+        ", \"log_dropped\": " + std::to_string(log_dropped) + ",\n  " + inbox.round_trip_us().json("round_trip_us") +
         ",\n  " + inbox.compute_ns().json("compute_ns") + ",\n  " +
         (lockstep ? std::string("\"wake_late_us\": null") : wake_late_us.json("wake_late_us"));
     write_summary_json(scene, result, out_dir + "/summary.json", loop);

@@ -54,20 +54,23 @@ struct ProcessOptions {
   int rt_priority = 0;        ///< SCHED_FIFO priority; 0 keeps the default scheduler
   int cpu = -1;               ///< pin to this CPU; -1 leaves affinity alone
   bool lock_memory = false;   ///< mlockall(MCL_CURRENT | MCL_FUTURE)
+  std::string log_path;       ///< record every message this process publishes (MessageLog)
+  bool log_wait = false;      ///< when the log's buffer is full, wait rather than drop (lock-step)
 };
 
 inline constexpr const char* kCommonUsage =
     "--scene S [--set key=value ...] [--lcm-url URL] [--state-channel C] [--command-channel C] "
-    "[--stats-channel C] [--rt-priority P] [--cpu K] [--lock-memory]";
+    "[--stats-channel C] [--rt-priority P] [--cpu K] [--lock-memory] [--log FILE [--log-wait]]";
 
 /// Consumes argv[i] (and its value) if it is a common option. Returns false if it is not one;
 /// a common option with a missing or malformed value sets `error`.
 inline bool parse_common_option(int argc, char** argv, int& i, ProcessOptions& o, std::string& error) {
   const std::string a = argv[i];
   if (a == "--lock-memory") return o.lock_memory = true;
+  if (a == "--log-wait") return o.log_wait = true;
   const bool takes_value = a == "--scene" || a == "--set" || a == "--lcm-url" || a == "--state-channel" ||
                            a == "--command-channel" || a == "--stats-channel" || a == "--rt-priority" ||
-                           a == "--cpu";
+                           a == "--cpu" || a == "--log";
   if (!takes_value) return false;
   if (i + 1 >= argc) {
     error = a + " needs a value";
@@ -89,6 +92,7 @@ inline bool parse_common_option(int argc, char** argv, int& i, ProcessOptions& o
   else if (a == "--state-channel") o.state_channel = v;
   else if (a == "--command-channel") o.command_channel = v;
   else if (a == "--stats-channel") o.stats_channel = v;
+  else if (a == "--log") o.log_path = v;
   else if (a == "--rt-priority") integer(1, 99, o.rt_priority);
   else integer(0, 1023, o.cpu);
   return true;

@@ -156,7 +156,7 @@ struct Control {
 
   double tracking_error(const Eigen::Matrix<double, N, 1>& q, double t) const {
     if constexpr (N == 2) {
-      if (controller) return controller->model().constraint_error(q, t)(0);
+      if (controller) return controller->model().phi(q, t)(0);
     }
     return 0;
   }

@@ -1,7 +1,9 @@
 #!/usr/bin/python3
-"""Closes the loop over LCM: launches gausstrack-controller and gausstrack-plant (and lcm-logger
-with --log) on one scene, waits for the run, stops the processes, then prints and writes the
-run's summary and draws its plots.
+"""Closes the loop over LCM: launches gausstrack-controller and gausstrack-plant on one scene,
+waits for the run, stops the processes, then prints and writes the run's summary and draws its
+plots. With --log each process records every message it publishes (states, commands, their
+loop statistics) in its own LCM log, and the two are merged into FILE: the record is complete
+whatever the pace, unlike a listener on the network, which can miss a burst.
 
 usage: gausstrack-run SCENE [--duration T] [--rate HZ] [--lockstep] [--log FILE] [--out DIR]
                       [--set key=value ...] [--lcm-url URL] [--channel-prefix P]
@@ -17,13 +19,9 @@ import argparse
 import json
 import os
 import signal
-import socket
-import struct
 import subprocess
 import sys
 import threading
-import time
-import urllib.parse
 
 HERE = os.path.dirname(os.path.realpath(__file__))
 
@@ -41,7 +39,7 @@ def parse(argv):
     p.add_argument("--duration", type=float, help="run length [s] (default: the scene's)")
     p.add_argument("--rate", type=float, default=1000.0, help="control rate [Hz] (default 1000)")
     p.add_argument("--lockstep", action="store_true", help="the plant waits for each command")
-    p.add_argument("--log", metavar="FILE", help="record the run's messages with lcm-logger")
+    p.add_argument("--log", metavar="FILE", help="record every message of the run (LCM log)")
     p.add_argument("--out", metavar="DIR")
     p.add_argument("--set", action="append", default=[], metavar="key=value", help="scene override")
     p.add_argument("--lcm-url", default="", help="default: LCM_DEFAULT_URL, else LCM's own")
@@ -55,34 +53,6 @@ def parse(argv):
     if args.rate <= 0 or (args.duration is not None and args.duration <= 0):
         p.error("--rate and --duration must be positive")
     return args
-
-
-def wait_for_logger(url, channel, log_path, timeout=5.0):
-    """lcm-logger says nothing when it has subscribed: publish a probe message (LCM's UDP
-    multicast wire format: magic "LC02", sequence number, NUL-terminated channel, payload) until
-    the log file shows it. Other transports are given a moment instead."""
-    url = url or os.environ.get("LCM_DEFAULT_URL") or "udpm://239.255.76.67:7667?ttl=0"
-    parsed = urllib.parse.urlparse(url)
-    if parsed.scheme != "udpm":
-        time.sleep(0.5)
-        return True
-    ttl = int(urllib.parse.parse_qs(parsed.query).get("ttl", ["0"])[0])
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_TTL, ttl)
-    sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_LOOP, 1)
-    deadline = time.monotonic() + timeout
-    seq = 0
-    try:
-        while time.monotonic() < deadline:
-            packet = struct.pack(">II", 0x4C433032, seq) + channel.encode() + b"\0" + b"probe"
-            sock.sendto(packet, (parsed.hostname, parsed.port or 7667))
-            seq += 1
-            time.sleep(0.05)
-            if os.path.exists(log_path) and os.path.getsize(log_path) > 0:
-                return True
-        return False
-    finally:
-        sock.close()
 
 
 class Process:
@@ -148,38 +118,27 @@ def main(argv):
         rt_plant = ["--rt-priority", "80", "--lock-memory", "--cpu", str(cpus - 1)]
         rt_controller = ["--rt-priority", "80", "--lock-memory", "--cpu", str(max(0, cpus - 2))]
 
-    logger = None
+    part_logs = []
+    log_args = {"controller": [], "plant": []}
     if args.log:
         if os.path.exists(args.log):
             os.remove(args.log)
-        cmd = ["lcm-logger", "-f", "-q", "--flush-interval=10", "-c", f"{prefix}_.*", args.log]
-        # A lock-step run publishes as fast as the loop turns: give the logger's socket a large
-        # receive buffer (the kernel caps it at net.core.rmem_max) so that a busy machine does
-        # not make it drop messages.
-        url = args.lcm_url or os.environ.get("LCM_DEFAULT_URL") or "udpm://239.255.76.67:7667?ttl=0"
-        if url.startswith("udpm://") and "recv_buf_size" not in url:
-            url += ("&" if "?" in url else "?") + "recv_buf_size=16777216"
-        cmd.insert(1, f"--lcm-url={url}")
-        logger = subprocess.Popen(cmd, stdout=subprocess.DEVNULL)
-        ready = wait_for_logger(args.lcm_url, f"{prefix}_LOG_PROBE", args.log)
-        if logger.poll() is not None or not ready:
-            logger.kill()
-            sys.exit(f"gausstrack-run: lcm-logger did not start recording {args.log}")
+        for name in log_args:
+            path = os.path.join(out, f"{name}.lcmlog")
+            part_logs.append(path)
+            log_args[name] = ["--log", path] + (["--log-wait"] if args.lockstep else [])
 
     controller = Process("gausstrack-controller",
-                         [tool("gausstrack-controller")] + common + rt_controller +
+                         [tool("gausstrack-controller")] + common + rt_controller + log_args["controller"] +
                          ["--stats-out", os.path.join(out, "controller.json")],
                          os.path.join(out, "controller.log"))
     while not controller.ready.wait(0.05):
         if controller.proc.poll() is not None:
             controller.stop()
             print("\n".join(controller.lines), file=sys.stderr)
-            if logger:
-                logger.send_signal(signal.SIGINT)
-                logger.wait()
             return 1
 
-    plant_cmd = [tool("gausstrack-plant")] + common + rt_plant + [
+    plant_cmd = [tool("gausstrack-plant")] + common + rt_plant + log_args["plant"] + [
         "--out", out, "--watchdog-ms", str(args.watchdog_ms), "--safe-action", args.safe_action,
         "--timeout-ms", str(args.timeout_ms)]
     if args.lockstep:
@@ -193,10 +152,15 @@ def main(argv):
         plant.proc.wait()
     plant_status = plant.stop()
     controller_status = controller.stop()
-    if logger:
-        time.sleep(0.2)  # the processes' final loop_stats_t
-        logger.send_signal(signal.SIGINT)
-        logger.wait()
+    log_status = 0
+    if args.log:
+        merge = subprocess.run([tool("gausstrack-log-merge"), args.log] + part_logs, capture_output=True, text=True)
+        log_status = merge.returncode
+        if log_status != 0:
+            print(f"gausstrack-run: merging the logs failed:\n{merge.stderr}", file=sys.stderr)
+        else:
+            for path in part_logs:
+                os.remove(path)
 
     summary_path = os.path.join(out, "summary.json")
     if not os.path.exists(summary_path):
@@ -214,6 +178,7 @@ def main(argv):
         "messages_rejected": plant_rejected + controller_rejected,
         "messages_rejected_by_plant": plant_rejected,
         "messages_rejected_by_controller": controller_rejected,
+        "log_dropped": summary.get("log_dropped", 0) + ctrl.get("log_dropped", 0),
         "commands_published": ctrl.get("commands_published", 0),
         "compute_ns_at_plant": summary.get("compute_ns"),
         "compute_ns": ctrl.get("compute_ns", summary.get("compute_ns")),
@@ -242,7 +207,7 @@ late {summary['commands_late']})
   watchdog trips      {summary['watchdog_trips']}
   written             {summary_path}""")
     if args.log:
-        print(f"  log                 {args.log}")
+        print(f"  log                 {args.log} ({summary['log_dropped']} messages dropped)")
 
     if not args.no_plots:
         plots = subprocess.run(["/usr/bin/python3", tool("plot_run.py"), out], capture_output=True, text=True)
@@ -250,7 +215,7 @@ late {summary['commands_late']})
             print(f"gausstrack-run: plotting failed:\n{plots.stderr}", file=sys.stderr)
         for line in plots.stdout.split():
             print(f"  figure              {line}")
-    return 0 if plant_status == 0 and controller_status == 0 else 1
+    return 0 if plant_status == 0 and controller_status == 0 and log_status == 0 else 1
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@
 #include "gausstrack/systems/duffing_chain.hpp"
 #include "gausstrack/systems/nonholonomic_particle.hpp"
 #include "gausstrack/systems/pendulum.hpp"
+#include "gausstrack/systems/planar_arm.hpp"
 #include "gausstrack/tracking_controller.hpp"
 #include "allocation_counter.hpp"
 #include "test_support.hpp"
@@ -94,25 +95,31 @@ TEST(Allocation, SolverFailurePaths) {
   EXPECT_EQ(allocations_during([&] { solver.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, sol); }), 0);
 }
 
+// Natural-form models: the jets that derive D, g, e and e' live on the stack.
 template <typename M>
 void expect_controller_allocation_free(const M& model) {
-  ControllerOptions<double> o;
-  o.stabilization.omega = 10;
+  using S = typename M::Scalar;
+  ControllerOptions<S> o;
+  o.stabilization.omega = S(10);
   TrackingController<M> controller(model, o);
   typename TrackingController<M>::Output out;
-  RandomSource<double> rng(4);
-  const Eigen::Matrix<double, M::kDof, 1> q = rng.matrix<M::kDof, 1>(), qd = rng.matrix<M::kDof, 1>();
+  RandomSource<S> rng(4);
+  const Eigen::Matrix<S, M::kDof, 1> q = rng.template matrix<M::kDof, 1>(), qd = rng.template matrix<M::kDof, 1>();
   const long n = allocations_during([&] {
-    for (int i = 0; i < 10; ++i) ASSERT_EQ(controller.compute(q, qd, 0.1 * i, out), Status::kOk);
+    for (int i = 0; i < 10; ++i) ASSERT_EQ(controller.compute(q, qd, S(0.1) * S(i), out), Status::kOk);
   });
   EXPECT_EQ(n, 0);
 }
 
-TEST(Allocation, ControllerOnEveryPaperSystem) {
+TEST(Allocation, ControllerOnEveryShippedSystem) {
   expect_controller_allocation_free(systems::CoupledDuffing<double>{});
   expect_controller_allocation_free(systems::Pendulum<double>{});
   expect_controller_allocation_free(systems::NonholonomicParticle<double>{});
   expect_controller_allocation_free(systems::DuffingChain<12, 6>{});
+  expect_controller_allocation_free(systems::PlanarArm<double>{});
+  expect_controller_allocation_free(systems::CoupledDuffing<float>{});
+  expect_controller_allocation_free(systems::PlanarArm<float>{});
+  expect_controller_allocation_free(systems::NonholonomicParticle<float>{});
 }
 
 }  // namespace

@@ -7,8 +7,11 @@
 
 #include "gausstrack/systems/coupled_duffing.hpp"
 #include "gausstrack/systems/duffing_chain.hpp"
+#include "gausstrack/consistent_state.hpp"
 #include "gausstrack/systems/pendulum.hpp"
+#include "gausstrack/systems/planar_arm.hpp"
 #include "gausstrack/tracking_controller.hpp"
+#include "hand_written_systems.hpp"
 #include "test_support.hpp"
 
 namespace gausstrack::test {
@@ -48,9 +51,14 @@ TEST(TrackingController, DefaultReproducesThePaperLawExactly) {
     const Eigen::Vector2d q = rng.matrix<2, 1>(), qd = rng.matrix<2, 1>();
     const double t = rng.uniform(0, 10);
     ASSERT_EQ(controller.compute(q, qd, t, out), Status::kOk);
-    solver.solve(model.mass_matrix(q, t), model.nonlinear_force(q, qd, t), model.applied_force(q, qd, t),
-                 model.constraint_matrix(q, t), model.constraint_rhs(q, qd, t), sol);
-    EXPECT_TRUE(out.force == sol.constraint_force);
+    // The hand-written rows, solved directly: the derived rows and the controller must give the
+    // same force to the last bit's neighbourhood.
+    HandDuffing<double> hand;
+    ModelTerms<2, 1, double> terms;
+    hand.evaluate(q, qd, t, terms);
+    solver.solve(terms.mass_matrix, terms.nonlinear_force, terms.applied_force, terms.constraint_matrix,
+                 terms.constraint_rhs, sol);
+    EXPECT_TRUE(near(out.force, sol.constraint_force, 1e-13, 1 + inf_norm(sol.constraint_force), "force"));
     EXPECT_TRUE(out.stabilizing.isZero(0));
   }
 }
@@ -92,7 +100,7 @@ std::vector<std::pair<double, double>> run_duffing(const ControllerOptions<doubl
   using Stepper = odeint::runge_kutta_dopri5<State, double, State, double, odeint::vector_space_algebra>;
   odeint::integrate_times(odeint::make_dense_output(1e-11, 1e-11, Stepper()), rhs, x, times.begin(),
                           times.end(), 1e-3, [&](const State& s, double t) {
-                            errors.emplace_back(t, model.constraint_error(s.head<2>(), t)(0));
+                            errors.emplace_back(t, model.phi(Eigen::Vector2d(s.head<2>()), t)(0));
                           });
   return errors;
 }
@@ -109,6 +117,69 @@ TEST(TrackingController, StabilizationMakesAnOffTrajectoryStartConverge) {
   for (const auto& [t, e] : converge)
     EXPECT_NEAR(e, (e0 + (e0_rate + w * e0) * t) * std::exp(-w * t), 1e-7) << "t = " << t;
   EXPECT_LT(std::abs(converge.back().second), 1e-9);
+}
+
+// The planar arm driven by its own law, the model as the plant (q'' = the law's acceleration),
+// dopri5 at tolerance 1e-11. Each hand coordinate's error obeys e'' = 0 without stabilization and
+// e'' + 2 w e' + w^2 e = 0 with zeta = 1, so from e(0) = e0, e'(0) = 0 the closed form is
+// e(t) = e0 (1 + w t) e^(-w t). Returns the hand's error phi at t = 0, 0.25, ..., 10.
+using ArmState = Eigen::Matrix<double, 6, 1>;
+std::vector<std::pair<double, Eigen::Vector2d>> run_arm(const ControllerOptions<double>& options,
+                                                        const Eigen::Vector3d& offset) {
+  using Arm = systems::PlanarArm<double>;
+  Arm arm;
+  Eigen::Vector3d q(0.2, 0.9, 0.6), qd = Eigen::Vector3d::Zero();
+  EXPECT_TRUE(make_consistent(arm, q, qd, 0.0));
+  TrackingController<Arm> controller(arm, options);
+  TrackingController<Arm>::Output out;
+  // Move the arm off the circle, keeping the hand's velocity error zero (q' on the tangent).
+  q += offset;
+  TermsOf<Arm> terms;
+  evaluate_model(arm, q, qd, 0.0, terms);
+  const Eigen::Matrix<double, 2, 3> jac = terms.constraint_matrix;
+  qd -= jac.transpose() * (jac * jac.transpose()).ldlt().solve(terms.constraint_error_rate);
+  auto rhs = [&](const ArmState& x, ArmState& dxdt, double t) {
+    EXPECT_EQ(controller.compute(x.head<3>(), x.tail<3>(), t, out), Status::kOk);
+    dxdt << x.tail<3>(), out.acceleration;
+  };
+  ArmState x;
+  x << q, qd;
+  std::vector<double> times;
+  for (int i = 0; i <= 40; ++i) times.push_back(0.25 * i);
+  std::vector<std::pair<double, Eigen::Vector2d>> errors;
+  namespace odeint = boost::numeric::odeint;
+  using Stepper = odeint::runge_kutta_dopri5<ArmState, double, ArmState, double, odeint::vector_space_algebra>;
+  odeint::integrate_times(odeint::make_dense_output(1e-11, 1e-11, Stepper()), rhs, x, times.begin(), times.end(),
+                          1e-3, [&](const ArmState& s, double t) {
+                            errors.emplace_back(t, arm.phi(Eigen::Vector3d(s.head<3>()), t));
+                          });
+  return errors;
+}
+
+TEST(PlanarArm, HandStaysOnTheCircleWithoutStabilization) {
+  const auto errors = run_arm(ControllerOptions<double>{}, Eigen::Vector3d::Zero());
+  ASSERT_EQ(errors.size(), 41u);
+  double worst = 0;
+  for (const auto& [t, e] : errors) worst = std::max(worst, e.norm());
+  std::printf("arm, no stabilization: max |phi| over 10 s = %.3g m\n", worst);
+  // The integrator's accuracy: local tolerance 1e-11 over 10 s of a 1-3 rad/s motion.
+  EXPECT_LT(worst, 1e-8);
+}
+
+TEST(PlanarArm, StabilizationRecoversAsTheGainsPredict) {
+  const double w = 5.0;
+  const Eigen::Vector3d offset(0.02, -0.03, 0.01);
+  const auto errors = run_arm(stabilized(1.0, w), offset);
+  const Eigen::Vector2d e0 = errors.front().second;
+  ASSERT_GT(e0.norm(), 1e-3);
+  for (const auto& [t, e] : errors) {
+    const Eigen::Vector2d predicted = e0 * (1 + w * t) * std::exp(-w * t);
+    EXPECT_TRUE(near(e, predicted, 1e-7, 1, "Baumgarte error dynamics")) << "t = " << t;
+  }
+  EXPECT_LT(errors.back().second.norm(), 1e-9);
+  // Without stabilization the same start keeps its error (e'' = 0 from e'(0) = 0).
+  const auto kept = run_arm(ControllerOptions<double>{}, offset);
+  EXPECT_TRUE(near(kept.back().second, e0, 1e-7, 1, "error kept"));
 }
 
 TEST(TrackingController, NonFiniteStateFailsWithZeroOutput) {

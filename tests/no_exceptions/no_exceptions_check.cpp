@@ -8,6 +8,7 @@
 #include "gausstrack/systems/duffing_chain.hpp"
 #include "gausstrack/systems/nonholonomic_particle.hpp"
 #include "gausstrack/systems/pendulum.hpp"
+#include "gausstrack/systems/planar_arm.hpp"
 
 namespace {
 
@@ -64,6 +65,8 @@ int main() {
   check_runs(gausstrack::systems::NonholonomicParticle<float>{});
   check_runs(gausstrack::systems::DuffingChain<3, 1, double>{});
   check_runs(gausstrack::systems::DuffingChain<3, 1, float>{});
+  check_runs(gausstrack::systems::PlanarArm<double>{});
+  check_runs(gausstrack::systems::PlanarArm<float>{});
   std::printf("%s\n", failures == 0 ? "no-exceptions build: all checks passed" : "no-exceptions build: FAILED");
   return failures == 0 ? 0 : 1;
 }

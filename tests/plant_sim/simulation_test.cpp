@@ -178,7 +178,7 @@ TEST(Simulation, PlantEffectsAgreeWithTheControllerModels) {
   for (int it = 0; it < 200; ++it) {
     const std::vector<double> q = {u(rng), u(rng)}, qd = {u(rng), u(rng)};
     const auto Q = plant_applied_force(s, q, qd, 0.0);
-    const Eigen::Vector2d f = m.nonlinear_force(Eigen::Vector2d(q[0], q[1]), Eigen::Vector2d(qd[0], qd[1]), 0.0);
+    const Eigen::Vector2d f = m.spring_damper_force(Eigen::Vector2d(q[0], q[1]), Eigen::Vector2d(qd[0], qd[1]));
     ASSERT_NEAR(Q[0], -f(0), 1e-12 * (1 + std::abs(f(0))));
     ASSERT_NEAR(Q[1], -f(1), 1e-12 * (1 + std::abs(f(1))));
   }

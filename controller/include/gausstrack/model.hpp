@@ -1,50 +1,161 @@
-// What a user's mechanical system provides to the tracking controller.
+// What a user's mechanical system provides to the tracking controller, and how the library turns
+// constraints written in their natural form into the acceleration-level rows of eq. (18).
+//
+// A system A(q,t) q'' + f(q,q',t) = Q(q,q',t) + Q' (eq. 7) with P constraint rows, stacked as
+//   rows [0, H)          holonomic or rheonomic, phi(q, t) = 0                       (eq. 3 integrable)
+//   rows [H, H + V)      nonholonomic Pfaffian, psi(q, q', t) = 0, affine in q'      (eq. 3)
+//   rows [H + V, P)      hand-written at acceleration level, D q'' = g               (eq. 18)
+// H = M::kHolonomicRows and V = M::kNonholonomicRows (each 0 when the model does not declare it).
+//
+// A model provides, with Scalar, kDof = N and kConstraints = P:
+//   void evaluate(q, qd, t, ModelTerms& terms) const noexcept
+//       fills mass_matrix A (N x N, symmetric positive definite), nonlinear_force f and
+//       applied_force Q (N), and, for the hand-written rows only, their entries of
+//       constraint_matrix D, constraint_rhs g and, optionally, constraint_error e and
+//       constraint_error_rate e'. One call per control step: kinematics shared by A, f, Q and
+//       the hand-written rows (an arm's sines and cosines) are computed once.
+//   template <typename T> Eigen::Matrix<T, H, 1> phi(const Eigen::Matrix<T, N, 1>& q, const T& t) const
+//   template <typename T> Eigen::Matrix<T, V, 1> psi(const Eigen::Matrix<T, N, 1>& q,
+//                                                     const Eigen::Matrix<T, N, 1>& qd, const T& t) const
+// The library derives the natural-form rows by automatic differentiation (jet.hpp), one pass each:
+//   holonomic:    D = phi_q,  g = -(q'^T phi_qq q' + 2 phi_qt q' + phi_tt),  e = phi,
+//                 e' = phi_q q' + phi_t
+//   nonholonomic: D = psi_q',  g = -(psi_q q' + psi_t),  e' = psi,  e = 0 (there is no position
+//                 error for a constraint that is not integrable)
+//
+// Where forces go, for every shipped system: f holds the terms of the equations of motion besides
+// A q'' that the paper writes on the left of eq. (7): Coriolis and centrifugal terms, springs and
+// dampers (eq. 35). Q holds the impressed forces from outside the system, gravity included
+// (eq. 33: m y'' = m g). The split changes neither Q' nor q'' (only f - Q enters eq. 32), but it
+// decides which of eq. (32)'s two terms a force appears in.
+//
+// Entries a model's evaluate never writes keep their previous value; ModelTerms starts at zero, so
+// a model with a diagonal A may write the diagonal only.
 #pragma once
 
 #include <Eigen/Core>
 #include <concepts>
 
+#include "gausstrack/jet.hpp"
+
 namespace gausstrack {
 
-/// A system A(q,t) q'' + f(q,q',t) = Q(q,q',t) + Q' with constraints D(q,t) q'' = g(q,q',t)
-/// (eq. 7 and eq. 18). N = M::kDof coordinates, P = M::kConstraints constraint rows.
-///   mass_matrix(q, t)          A, N x N symmetric positive definite
-///   nonlinear_force(q, qd, t)  f, the left-side terms of eq. (7) besides A q'' (springs,
-///                              dampers, Coriolis), N
-///   applied_force(q, qd, t)    Q, the impressed forces, N
-///   constraint_matrix(q, t)    D, P x N
-///   constraint_rhs(q, qd, t)   g, P: the constraints differentiated to acceleration level
-/// Results are returned by value as fixed-size Eigen objects (no allocation).
+/// What one evaluation of a model at (q, q', t) computes (the Data of Pinocchio's Model/Data split).
+template <int N, int P, typename Scalar>
+struct ModelTerms {
+  Eigen::Matrix<Scalar, N, N> mass_matrix = Eigen::Matrix<Scalar, N, N>::Zero();  ///< A
+  Eigen::Matrix<Scalar, N, 1> nonlinear_force = Eigen::Matrix<Scalar, N, 1>::Zero();  ///< f
+  Eigen::Matrix<Scalar, N, 1> applied_force = Eigen::Matrix<Scalar, N, 1>::Zero();    ///< Q
+  Eigen::Matrix<Scalar, P, N> constraint_matrix = Eigen::Matrix<Scalar, P, N>::Zero();  ///< D
+  Eigen::Matrix<Scalar, P, 1> constraint_rhs = Eigen::Matrix<Scalar, P, 1>::Zero();     ///< g
+  Eigen::Matrix<Scalar, P, 1> constraint_error = Eigen::Matrix<Scalar, P, 1>::Zero();   ///< e
+  Eigen::Matrix<Scalar, P, 1> constraint_error_rate = Eigen::Matrix<Scalar, P, 1>::Zero();  ///< e'
+};
+
+namespace detail {
+template <typename M>
+constexpr int holonomic_rows() {
+  if constexpr (requires { M::kHolonomicRows; }) return M::kHolonomicRows;
+  else return 0;
+}
+template <typename M>
+constexpr int nonholonomic_rows() {
+  if constexpr (requires { M::kNonholonomicRows; }) return M::kNonholonomicRows;
+  else return 0;
+}
+}  // namespace detail
+
+/// Row counts of a model's three kinds of constraint rows.
+template <typename M>
+struct RowLayout {
+  static constexpr int kHolonomic = detail::holonomic_rows<M>();
+  static constexpr int kNonholonomic = detail::nonholonomic_rows<M>();
+  static constexpr int kAcceleration = M::kConstraints - kHolonomic - kNonholonomic;
+  static constexpr int kFirstNonholonomic = kHolonomic;
+  static constexpr int kFirstAcceleration = kHolonomic + kNonholonomic;
+};
+
+template <typename M>
+using TermsOf = ModelTerms<M::kDof, M::kConstraints, typename M::Scalar>;
+
 template <typename M>
 concept Model = requires(const M& m, const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& q,
-                         typename M::Scalar t) {
+                         typename M::Scalar t, TermsOf<M>& terms) {
   requires std::floating_point<typename M::Scalar>;
   requires M::kDof >= 1 && M::kConstraints >= 1;
-  { m.mass_matrix(q, t) } -> std::convertible_to<Eigen::Matrix<typename M::Scalar, M::kDof, M::kDof>>;
-  { m.nonlinear_force(q, q, t) } -> std::convertible_to<Eigen::Matrix<typename M::Scalar, M::kDof, 1>>;
-  { m.applied_force(q, q, t) } -> std::convertible_to<Eigen::Matrix<typename M::Scalar, M::kDof, 1>>;
-  { m.constraint_matrix(q, t) }
-      -> std::convertible_to<Eigen::Matrix<typename M::Scalar, M::kConstraints, M::kDof>>;
-  { m.constraint_rhs(q, q, t) }
-      -> std::convertible_to<Eigen::Matrix<typename M::Scalar, M::kConstraints, 1>>;
+  requires RowLayout<M>::kHolonomic >= 0 && RowLayout<M>::kNonholonomic >= 0 &&
+               RowLayout<M>::kAcceleration >= 0;
+  { m.evaluate(q, q, t, terms) } noexcept;
+  requires RowLayout<M>::kHolonomic == 0 || requires {
+    { m.phi(q, t) } -> std::convertible_to<Eigen::Matrix<typename M::Scalar, RowLayout<M>::kHolonomic, 1>>;
+  };
+  requires RowLayout<M>::kNonholonomic == 0 || requires {
+    { m.psi(q, q, t) } -> std::convertible_to<Eigen::Matrix<typename M::Scalar, RowLayout<M>::kNonholonomic, 1>>;
+  };
 };
 
-/// A model whose constraints are holonomic, phi(q, t) = 0: constraint_error(q, t) returns phi.
-template <typename M>
-concept HasPositionError = Model<M> && requires(
-    const M& m, const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& q, typename M::Scalar t) {
-  { m.constraint_error(q, t) }
-      -> std::convertible_to<Eigen::Matrix<typename M::Scalar, M::kConstraints, 1>>;
-};
+/// Holonomic rows of `terms` starting at row `first`, derived from the model's phi by one pass on
+/// jets seeded with d q_i = e_i and the direction (q', 1) in (q, t).
+template <int First, Model M>
+void derive_holonomic_rows(const M& m, const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& q,
+                           const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& qd, typename M::Scalar t,
+                           TermsOf<M>& terms) noexcept {
+  using S = typename M::Scalar;
+  constexpr int N = M::kDof;
+  constexpr int H = RowLayout<M>::kHolonomic;
+  using J = Jet<S, N>;
+  Eigen::Matrix<J, N, 1> qj;
+  for (int i = 0; i < N; ++i) {
+    qj(i).v = q(i);
+    qj(i).d.setZero();
+    qj(i).d(i) = S(1);
+    qj(i).t1 = qd(i);
+  }
+  const J tj(t, J::Gradient::Zero(), S(1), S(0));
+  const Eigen::Matrix<J, H, 1> r = m.phi(qj, tj);
+  for (int k = 0; k < H; ++k) {
+    terms.constraint_matrix.row(First + k) = r(k).d.transpose();
+    terms.constraint_rhs(First + k) = -r(k).t2;
+    terms.constraint_error(First + k) = r(k).v;
+    terms.constraint_error_rate(First + k) = r(k).t1;
+  }
+}
 
-/// A model that can evaluate its constraints at velocity level: constraint_error_rate(q, qd, t)
-/// returns phi'(q, q', t) for holonomic constraints, or the Pfaffian form's value for
-/// nonholonomic ones (eq. 3 divided by dt).
-template <typename M>
-concept HasVelocityError = Model<M> && requires(
-    const M& m, const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& q, typename M::Scalar t) {
-  { m.constraint_error_rate(q, q, t) }
-      -> std::convertible_to<Eigen::Matrix<typename M::Scalar, M::kConstraints, 1>>;
-};
+/// Nonholonomic rows from psi, affine in q': jets seeded with d q'_i = e_i and the direction
+/// (q', 0, 1) in (q, q', t), so that d = psi_q' and t1 = psi_q q' + psi_t.
+template <int First, Model M>
+void derive_nonholonomic_rows(const M& m, const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& q,
+                              const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& qd, typename M::Scalar t,
+                              TermsOf<M>& terms) noexcept {
+  using S = typename M::Scalar;
+  constexpr int N = M::kDof;
+  constexpr int V = RowLayout<M>::kNonholonomic;
+  using J = Jet<S, N>;
+  Eigen::Matrix<J, N, 1> qj, qdj;
+  for (int i = 0; i < N; ++i) {
+    qj(i) = J(q(i), J::Gradient::Zero(), qd(i), S(0));
+    qdj(i) = J(qd(i), J::Gradient::Unit(i), S(0), S(0));
+  }
+  const J tj(t, J::Gradient::Zero(), S(1), S(0));
+  const Eigen::Matrix<J, V, 1> r = m.psi(qj, qdj, tj);
+  for (int k = 0; k < V; ++k) {
+    terms.constraint_matrix.row(First + k) = r(k).d.transpose();
+    terms.constraint_rhs(First + k) = -r(k).t1;
+    terms.constraint_error(First + k) = S(0);
+    terms.constraint_error_rate(First + k) = r(k).v;
+  }
+}
+
+/// Every term of model `m` at (q, q', t): the model's own evaluate (A, f, Q, hand-written rows),
+/// then the rows derived from phi and psi. Allocation-free and exception-free.
+template <Model M>
+void evaluate_model(const M& m, const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& q,
+                    const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& qd, typename M::Scalar t,
+                    TermsOf<M>& terms) noexcept {
+  m.evaluate(q, qd, t, terms);
+  if constexpr (RowLayout<M>::kHolonomic > 0) derive_holonomic_rows<0>(m, q, qd, t, terms);
+  if constexpr (RowLayout<M>::kNonholonomic > 0)
+    derive_nonholonomic_rows<RowLayout<M>::kFirstNonholonomic>(m, q, qd, t, terms);
+}
 
 }  // namespace gausstrack

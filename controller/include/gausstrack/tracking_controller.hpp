@@ -2,6 +2,7 @@
 // closed-loop part, a feedforward part and an optional constraint-stabilizing part.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <utility>
 
@@ -10,10 +11,13 @@
 
 namespace gausstrack {
 
-/// Constraint stabilization: g is replaced by g - 2 zeta omega e' - omega^2 e, so that the
-/// constraint error obeys e'' + 2 zeta omega e' + omega^2 e = 0 instead of e'' = 0 (which keeps
-/// any initial error and lets rounding, sampling and model error drift). omega = 0 (the default)
-/// reproduces the paper's law exactly.
+/// Constraint stabilization by Baumgarte's method (Baumgarte, Comput. Methods Appl. Mech. Eng. 1,
+/// 1972), per constraint row: g_i is replaced by g_i - 2 zeta omega e'_i - omega^2 e_i, so that
+/// a holonomic row's error obeys e'' + 2 zeta omega e' + omega^2 e = 0 instead of e'' = 0 (which
+/// keeps any initial error and lets rounding, sampling and model error drift). A nonholonomic row
+/// has no position error (e = 0): its velocity-level error obeys e'' + 2 zeta omega e' = 0, i.e.
+/// decays at the rate 2 zeta omega. A hand-written row is stabilized through the e and e' its model
+/// writes (none: no effect). omega = 0 (the default) reproduces the paper's law exactly.
 template <typename Scalar>
 struct Stabilization {
   Scalar zeta = Scalar(1);   ///< damping ratio [-]
@@ -24,6 +28,7 @@ struct Stabilization {
 template <typename Scalar>
 struct ControllerOptions {
   SolverOptions<Scalar> solver{};
+  /// Gains for every row; TrackingController::set_stabilization changes one row's.
   Stabilization<Scalar> stabilization{};
 
   /// nullptr when the options are usable, else what is wrong with them. Never throws.
@@ -53,12 +58,13 @@ struct ControlOutput {
   VectorN feedforward = VectorN::Zero();   ///<                                          [N]
   VectorN stabilizing = VectorN::Zero();   ///< force due to -2 zeta omega e' - omega^2 e  [N]
   VectorN acceleration = VectorN::Zero();  ///< q'' the force produces on the model, eq. (30)
-  VectorP constraint_error = VectorP::Zero();       ///< e(q,t) when the model provides it
-  VectorP constraint_error_rate = VectorP::Zero();  ///< e'(q,q',t) when the model provides it
+  VectorP constraint_error = VectorP::Zero();       ///< e: phi for holonomic rows, else 0 or the model's
+  VectorP constraint_error_rate = VectorP::Zero();  ///< e': phi' or psi, or the model's
   SolveDiagnostics<Scalar> diagnostics;
 };
 
-/// Evaluates eq. (32) for a Model at a measured state. Allocation-free and exception-free
+/// Evaluates eq. (32) for a Model at a measured state: one evaluation of the model's terms
+/// (evaluate_model), Baumgarte's correction per row, one solve. Allocation-free and exception-free
 /// after construction.
 template <Model M>
 class TrackingController {
@@ -70,17 +76,35 @@ class TrackingController {
   using VectorP = Eigen::Matrix<Scalar, P, 1>;
   using Output = ControlOutput<N, P, Scalar>;
   using Options = ControllerOptions<Scalar>;
+  using Terms = TermsOf<M>;
 
   /// Throws std::invalid_argument (when exceptions are enabled; aborts otherwise) if
   /// `options.validate()` reports a problem.
   explicit TrackingController(M model = M{}, const Options& options = Options{})
       : model_(std::move(model)), options_(options), solver_(options.solver) {
     if (const char* problem = options.validate()) config_error(problem);
+    row_gains_.fill(options.stabilization);
   }
 
   M& model() noexcept { return model_; }
   const M& model() const noexcept { return model_; }
   const Options& options() const noexcept { return options_; }
+
+  /// Baumgarte gains of one constraint row (rows in the model's order: holonomic, nonholonomic,
+  /// hand-written). Returns false, changing nothing, for a row outside [0, P) or gains that are
+  /// not finite and >= 0.
+  bool set_stabilization(int row, const Stabilization<Scalar>& gains) noexcept {
+    if (row < 0 || row >= P || !std::isfinite(gains.zeta) || !(gains.zeta >= Scalar(0)) ||
+        !std::isfinite(gains.omega) || !(gains.omega >= Scalar(0)))
+      return false;
+    row_gains_[static_cast<std::size_t>(row)] = gains;
+    return true;
+  }
+  const Stabilization<Scalar>& stabilization(int row) const noexcept {
+    return row_gains_[static_cast<std::size_t>(row)];
+  }
+  /// The terms of the last compute (A, f, Q, D, g, e, e' at the measured state).
+  const Terms& terms() const noexcept { return terms_; }
 
   /// Control force for state (q [m], qd [m/s], t [s]).
   template <typename Dq, typename Dqd>
@@ -94,24 +118,24 @@ class TrackingController {
     }
     const VectorN qv = q;
     const VectorN qdv = qd;
+    evaluate_model(model_, qv, qdv, t, terms_);
+    out.constraint_error = terms_.constraint_error;
+    out.constraint_error_rate = terms_.constraint_error_rate;
 
-    out.constraint_error.setZero();
-    out.constraint_error_rate.setZero();
-    if constexpr (HasPositionError<M>) out.constraint_error = model_.constraint_error(qv, t);
-    if constexpr (HasVelocityError<M>) out.constraint_error_rate = model_.constraint_error_rate(qv, qdv, t);
-
-    // Stabilizing correction to g (zero when disabled or when the model gives no errors).
+    // Baumgarte's correction to g, row by row (zero for rows whose gains are off).
     VectorP correction = VectorP::Zero();
-    const Stabilization<Scalar>& stab = options_.stabilization;
-    if (stab.enabled()) {
-      correction = -(Scalar(2) * stab.zeta * stab.omega) * out.constraint_error_rate -
-                   (stab.omega * stab.omega) * out.constraint_error;
+    bool stabilized = false;
+    for (int i = 0; i < P; ++i) {
+      const Stabilization<Scalar>& s = row_gains_[static_cast<std::size_t>(i)];
+      if (!s.enabled()) continue;
+      stabilized = true;
+      correction(i) = -(Scalar(2) * s.zeta * s.omega) * terms_.constraint_error_rate(i) -
+                      (s.omega * s.omega) * terms_.constraint_error(i);
     }
 
-    const VectorP g = model_.constraint_rhs(qv, qdv, t) + correction;
-    const Status status = solver_.solve(model_.mass_matrix(qv, t), model_.nonlinear_force(qv, qdv, t),
-                                        model_.applied_force(qv, qdv, t),
-                                        model_.constraint_matrix(qv, t), g, solution_);
+    const VectorP g = terms_.constraint_rhs + correction;
+    const Status status = solver_.solve(terms_.mass_matrix, terms_.nonlinear_force, terms_.applied_force,
+                                        terms_.constraint_matrix, g, solution_);
     out.diagnostics = solution_.diagnostics;
     if (failed(status)) {
       out.force.setZero();
@@ -123,7 +147,7 @@ class TrackingController {
     }
     out.force = solution_.constraint_force;
     out.closed_loop = solution_.force_from_impressed;
-    out.stabilizing = stab.enabled() ? solver_.force_for_rhs(correction) : VectorN::Zero();
+    out.stabilizing = stabilized ? solver_.force_for_rhs(correction) : VectorN::Zero();
     out.feedforward = solution_.force_from_rhs - out.stabilizing;
     out.acceleration = solution_.acceleration;
     return status;
@@ -134,6 +158,8 @@ class TrackingController {
 
   M model_;
   Options options_;
+  std::array<Stabilization<Scalar>, static_cast<std::size_t>(P)> row_gains_{};
+  Terms terms_{};
   ConstraintSolver<N, P, Scalar> solver_;
   ConstraintSolution<N, P, Scalar> solution_;
 };

@@ -12,9 +12,13 @@ struct DecayingSine {
   Scalar alpha = Scalar(4);                         ///< decay rate [1/s]
   Scalar omega = Scalar(2) * std::numbers::pi_v<Scalar>;  ///< [rad/s]
 
-  Scalar position(Scalar t) const noexcept {
-    return amplitude * std::exp(-alpha * t) * std::sin(omega * t);
+  /// s(t), for Scalar or a jet (constraints differentiate through it).
+  template <typename T>
+  T position(const T& t) const {
+    using std::exp, std::sin;
+    return amplitude * (exp(-alpha * t) * sin(omega * t));
   }
+  /// s'(t) and s''(t), for hand-written rows and initial conditions.
   Scalar velocity(Scalar t) const noexcept {
     return amplitude * std::exp(-alpha * t) *
            (omega * std::cos(omega * t) - alpha * std::sin(omega * t));

@@ -4,22 +4,25 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstddef>
 
+#include "gausstrack/model.hpp"
 #include "gausstrack/systems/decaying_sine.hpp"
 
 namespace gausstrack::systems {
 
 /// Mass i (i = 0..N-2) is tied to mass i+1 by (k1, kb1, c1); the last mass to ground by
 /// (k2, kb2, c2). Masses alternate m1, m2 from the first. Constraint j (j = 0..P-1):
-/// x_j - x_(j+1) = s_j(t), so D has rows e_j - e_(j+1) (rank P) and g_j = s_j''(t).
+/// phi_j = x_j - x_(j+1) - s_j(t), so D has rows e_j - e_(j+1) (rank P) and g_j = s_j''(t).
 template <int N, int P, typename Scalar_ = double>
 struct DuffingChain {
   static_assert(N >= 2 && P >= 1 && P <= N - 1, "DuffingChain needs 1 <= P <= N - 1");
   using Scalar = Scalar_;
   static constexpr int kDof = N;
   static constexpr int kConstraints = P;
+  static constexpr int kHolonomicRows = P;
   using Vector = Eigen::Matrix<Scalar, N, 1>;
-  using Rhs = Eigen::Matrix<Scalar, P, 1>;
+  using Terms = ModelTerms<N, P, Scalar>;
 
   Scalar m1 = Scalar(2), m2 = Scalar(1);
   Scalar k1 = Scalar(10), k2 = Scalar(12);
@@ -27,13 +30,10 @@ struct DuffingChain {
   Scalar c1 = Scalar(0.1), c2 = Scalar(0.15);
   std::array<DecayingSine<Scalar>, P> trajectories{};
 
-  Eigen::Matrix<Scalar, N, N> mass_matrix(const Vector&, Scalar) const noexcept {
-    Eigen::Matrix<Scalar, N, N> a = Eigen::Matrix<Scalar, N, N>::Zero();
-    for (int i = 0; i < N; ++i) a(i, i) = (i % 2 == 0) ? m1 : m2;
-    return a;
-  }
-  Vector nonlinear_force(const Vector& q, const Vector& qd, Scalar) const noexcept {
-    Vector f = Vector::Zero();
+  void evaluate(const Vector& q, const Vector& qd, Scalar, Terms& terms) const noexcept {
+    for (int i = 0; i < N; ++i) terms.mass_matrix(i, i) = (i % 2 == 0) ? m1 : m2;
+    Vector& f = terms.nonlinear_force;
+    f.setZero();
     for (int i = 0; i + 1 < N; ++i) {
       const Scalar d = q(i) - q(i + 1);
       const Scalar coupling = k1 * d + c1 * (qd(i) - qd(i + 1)) + kb1 * d * d * d;
@@ -42,34 +42,12 @@ struct DuffingChain {
     }
     const Scalar x = q(N - 1);
     f(N - 1) += k2 * x + c2 * qd(N - 1) + kb2 * x * x * x;
-    return f;
   }
-  Vector applied_force(const Vector&, const Vector&, Scalar) const noexcept {
-    return Vector::Zero();
-  }
-  Eigen::Matrix<Scalar, P, N> constraint_matrix(const Vector&, Scalar) const noexcept {
-    Eigen::Matrix<Scalar, P, N> d = Eigen::Matrix<Scalar, P, N>::Zero();
-    for (int j = 0; j < P; ++j) {
-      d(j, j) = Scalar(1);
-      d(j, j + 1) = Scalar(-1);
-    }
-    return d;
-  }
-  Rhs constraint_rhs(const Vector&, const Vector&, Scalar t) const noexcept {
-    Rhs g;
-    for (int j = 0; j < P; ++j) g(j) = trajectories[static_cast<std::size_t>(j)].acceleration(t);
-    return g;
-  }
-  Rhs constraint_error(const Vector& q, Scalar t) const noexcept {
-    Rhs e;
+  template <typename T>
+  Eigen::Matrix<T, P, 1> phi(const Eigen::Matrix<T, N, 1>& q, const T& t) const {
+    Eigen::Matrix<T, P, 1> e;
     for (int j = 0; j < P; ++j)
       e(j) = q(j) - q(j + 1) - trajectories[static_cast<std::size_t>(j)].position(t);
-    return e;
-  }
-  Rhs constraint_error_rate(const Vector&, const Vector& qd, Scalar t) const noexcept {
-    Rhs e;
-    for (int j = 0; j < P; ++j)
-      e(j) = qd(j) - qd(j + 1) - trajectories[static_cast<std::size_t>(j)].velocity(t);
     return e;
   }
 };

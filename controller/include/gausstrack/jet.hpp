@@ -1,0 +1,224 @@
+// Forward-mode automatic differentiation for constraints written in their natural form.
+//
+// A Jet<S, N> carries, for one intermediate quantity x of a user's constraint function:
+//   v    its value,
+//   d    its gradient with respect to N seeded variables (fixed size, no allocation),
+//   t1   its first derivative along one direction s,
+//   t2   its second derivative along that direction,
+// so one evaluation of phi(q, t) on jets seeded with d q_i = e_i and the direction (q', 1) in
+// (q, t) gives, in a single pass and without a Hessian:
+//   D = phi_q (the rows' d),  e' = phi_q q' + phi_t (t1),
+//   g = -(q'^T phi_qq q' + 2 phi_qt q' + phi_tt) = -t2.
+// The gradient part follows the first-order chain rule; (v, t1, t2) is truncated Taylor
+// arithmetic in s (x(s) = v + t1 s + t2 s^2 / 2).
+//
+// Why our own type and not Eigen's unsupported AutoDiffScalar: AutoDiffScalar gives first
+// derivatives only, so g needs it nested (an AutoDiffScalar whose derivatives are
+// AutoDiffScalars), which carries N + 1 inner jets of N + 1 entries each, (N + 1)^2 numbers per
+// quantity, where g needs one directional second derivative. bench/controller/jet_bench.cpp
+// measures both on the same constraints (the arm's end effector, the pendulum's length): both are
+// allocation-free for fixed sizes, ours is the faster (see the README's performance section).
+//
+// Functions a constraint may use: + - * / with jets and scalars, and sin, cos, tan, exp, log,
+// sqrt, pow (scalar exponent), abs, atan, atan2, asin, acos, sinh, cosh, tanh, found by
+// argument-dependent lookup. Write constraints as templates on the scalar type T and call these
+// unqualified after `using std::sin;` (and so on), so that the same code runs on S and on jets.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+
+namespace gausstrack {
+
+template <typename S, int N>
+struct Jet {
+  using Gradient = Eigen::Matrix<S, N, 1, Eigen::DontAlign>;
+  S v = S(0);
+  Gradient d = Gradient::Zero();
+  S t1 = S(0);
+  S t2 = S(0);
+
+  Jet() = default;
+  Jet(S value) : v(value) {}  // NOLINT(google-explicit-constructor): constants mix with jets
+  Jet(S value, const Gradient& gradient, S first, S second) : v(value), d(gradient), t1(first), t2(second) {}
+
+  Jet& operator+=(const Jet& b) { return *this = *this + b; }
+  Jet& operator-=(const Jet& b) { return *this = *this - b; }
+  Jet& operator*=(const Jet& b) { return *this = *this * b; }
+  Jet& operator/=(const Jet& b) { return *this = *this / b; }
+};
+
+// Chain rule for y = f(x) given f(v), f'(v), f''(v).
+template <typename S, int N>
+inline Jet<S, N> chain(const Jet<S, N>& x, S f, S df, S ddf) {
+  return {f, df * x.d, df * x.t1, ddf * x.t1 * x.t1 + df * x.t2};
+}
+
+template <typename S, int N>
+inline Jet<S, N> operator+(const Jet<S, N>& a) { return a; }
+template <typename S, int N>
+inline Jet<S, N> operator-(const Jet<S, N>& a) { return {-a.v, -a.d, -a.t1, -a.t2}; }
+template <typename S, int N>
+inline Jet<S, N> operator+(const Jet<S, N>& a, const Jet<S, N>& b) {
+  return {a.v + b.v, a.d + b.d, a.t1 + b.t1, a.t2 + b.t2};
+}
+template <typename S, int N>
+inline Jet<S, N> operator-(const Jet<S, N>& a, const Jet<S, N>& b) {
+  return {a.v - b.v, a.d - b.d, a.t1 - b.t1, a.t2 - b.t2};
+}
+template <typename S, int N>
+inline Jet<S, N> operator*(const Jet<S, N>& a, const Jet<S, N>& b) {
+  return {a.v * b.v, a.v * b.d + b.v * a.d, a.v * b.t1 + a.t1 * b.v,
+          a.v * b.t2 + S(2) * a.t1 * b.t1 + a.t2 * b.v};
+}
+template <typename S, int N>
+inline Jet<S, N> operator/(const Jet<S, N>& a, const Jet<S, N>& b) {
+  const S inv = S(1) / b.v;
+  const S c = a.v * inv;
+  const S c1 = (a.t1 - c * b.t1) * inv;
+  return {c, (a.d - c * b.d) * inv, c1, (a.t2 - S(2) * c1 * b.t1 - c * b.t2) * inv};
+}
+
+// Mixed with plain scalars (parameters such as a length).
+template <typename S, int N>
+inline Jet<S, N> operator+(const Jet<S, N>& a, S b) { return {a.v + b, a.d, a.t1, a.t2}; }
+template <typename S, int N>
+inline Jet<S, N> operator+(S a, const Jet<S, N>& b) { return b + a; }
+template <typename S, int N>
+inline Jet<S, N> operator-(const Jet<S, N>& a, S b) { return {a.v - b, a.d, a.t1, a.t2}; }
+template <typename S, int N>
+inline Jet<S, N> operator-(S a, const Jet<S, N>& b) { return {a - b.v, -b.d, -b.t1, -b.t2}; }
+template <typename S, int N>
+inline Jet<S, N> operator*(const Jet<S, N>& a, S b) { return {a.v * b, a.d * b, a.t1 * b, a.t2 * b}; }
+template <typename S, int N>
+inline Jet<S, N> operator*(S a, const Jet<S, N>& b) { return b * a; }
+template <typename S, int N>
+inline Jet<S, N> operator/(const Jet<S, N>& a, S b) { return a * (S(1) / b); }
+template <typename S, int N>
+inline Jet<S, N> operator/(S a, const Jet<S, N>& b) { return Jet<S, N>(a) / b; }
+
+// Comparisons look at values (for branches in user code; derivatives follow the branch taken).
+template <typename S, int N>
+inline bool operator<(const Jet<S, N>& a, const Jet<S, N>& b) { return a.v < b.v; }
+template <typename S, int N>
+inline bool operator>(const Jet<S, N>& a, const Jet<S, N>& b) { return a.v > b.v; }
+template <typename S, int N>
+inline bool operator<=(const Jet<S, N>& a, const Jet<S, N>& b) { return a.v <= b.v; }
+template <typename S, int N>
+inline bool operator>=(const Jet<S, N>& a, const Jet<S, N>& b) { return a.v >= b.v; }
+template <typename S, int N>
+inline bool operator==(const Jet<S, N>& a, const Jet<S, N>& b) { return a.v == b.v; }
+template <typename S, int N>
+inline bool operator!=(const Jet<S, N>& a, const Jet<S, N>& b) { return a.v != b.v; }
+
+template <typename S, int N>
+inline Jet<S, N> sin(const Jet<S, N>& x) {
+  const S s = std::sin(x.v), c = std::cos(x.v);
+  return chain(x, s, c, -s);
+}
+template <typename S, int N>
+inline Jet<S, N> cos(const Jet<S, N>& x) {
+  const S s = std::sin(x.v), c = std::cos(x.v);
+  return chain(x, c, -s, -c);
+}
+template <typename S, int N>
+inline Jet<S, N> tan(const Jet<S, N>& x) {
+  const S t = std::tan(x.v), sec2 = S(1) + t * t;
+  return chain(x, t, sec2, S(2) * t * sec2);
+}
+template <typename S, int N>
+inline Jet<S, N> exp(const Jet<S, N>& x) {
+  const S e = std::exp(x.v);
+  return chain(x, e, e, e);
+}
+template <typename S, int N>
+inline Jet<S, N> log(const Jet<S, N>& x) {
+  const S inv = S(1) / x.v;
+  return chain(x, std::log(x.v), inv, -inv * inv);
+}
+template <typename S, int N>
+inline Jet<S, N> sqrt(const Jet<S, N>& x) {
+  const S r = std::sqrt(x.v), dr = S(0.5) / r;
+  return chain(x, r, dr, -dr / (S(2) * x.v));
+}
+template <typename S, int N>
+inline Jet<S, N> pow(const Jet<S, N>& x, S p) {
+  const S f = std::pow(x.v, p);
+  const S df = p * std::pow(x.v, p - S(1));
+  const S ddf = p * (p - S(1)) * std::pow(x.v, p - S(2));
+  return chain(x, f, df, ddf);
+}
+template <typename S, int N>
+inline Jet<S, N> abs(const Jet<S, N>& x) { return x.v < S(0) ? -x : x; }
+template <typename S, int N>
+inline Jet<S, N> atan(const Jet<S, N>& x) {
+  const S inv = S(1) / (S(1) + x.v * x.v);
+  return chain(x, std::atan(x.v), inv, -S(2) * x.v * inv * inv);
+}
+template <typename S, int N>
+inline Jet<S, N> asin(const Jet<S, N>& x) {
+  const S inv = S(1) / std::sqrt(S(1) - x.v * x.v);
+  return chain(x, std::asin(x.v), inv, x.v * inv * inv * inv);
+}
+template <typename S, int N>
+inline Jet<S, N> acos(const Jet<S, N>& x) {
+  const S inv = S(1) / std::sqrt(S(1) - x.v * x.v);
+  return chain(x, std::acos(x.v), -inv, -x.v * inv * inv * inv);
+}
+template <typename S, int N>
+inline Jet<S, N> sinh(const Jet<S, N>& x) {
+  const S s = std::sinh(x.v), c = std::cosh(x.v);
+  return chain(x, s, c, s);
+}
+template <typename S, int N>
+inline Jet<S, N> cosh(const Jet<S, N>& x) {
+  const S s = std::sinh(x.v), c = std::cosh(x.v);
+  return chain(x, c, s, c);
+}
+template <typename S, int N>
+inline Jet<S, N> tanh(const Jet<S, N>& x) {
+  const S t = std::tanh(x.v), sech2 = S(1) - t * t;
+  return chain(x, t, sech2, -S(2) * t * sech2);
+}
+/// atan2(y, x) with its gradient and second directional derivative (both arguments may vary).
+template <typename S, int N>
+inline Jet<S, N> atan2(const Jet<S, N>& y, const Jet<S, N>& x) {
+  const S r2 = x.v * x.v + y.v * y.v, inv = S(1) / r2, inv2 = inv * inv;
+  const S hy = x.v * inv, hx = -y.v * inv;
+  const S hxx = S(2) * x.v * y.v * inv2, hyy = -hxx, hxy = (y.v * y.v - x.v * x.v) * inv2;
+  return {std::atan2(y.v, x.v), hx * x.d + hy * y.d, hx * x.t1 + hy * y.t1,
+          hx * x.t2 + hy * y.t2 + hxx * x.t1 * x.t1 + S(2) * hxy * x.t1 * y.t1 + hyy * y.t1 * y.t1};
+}
+
+}  // namespace gausstrack
+
+namespace Eigen {
+template <typename S, int N>
+struct NumTraits<gausstrack::Jet<S, N>> : NumTraits<S> {
+  using Real = gausstrack::Jet<S, N>;
+  using NonInteger = Real;
+  using Nested = Real;
+  using Literal = Real;
+  enum {
+    IsComplex = 0,
+    IsInteger = 0,
+    IsSigned = 1,
+    RequireInitialization = 1,
+    ReadCost = (N + 3) * NumTraits<S>::ReadCost,
+    AddCost = (N + 3) * NumTraits<S>::AddCost,
+    MulCost = (2 * N + 6) * NumTraits<S>::MulCost,
+  };
+  static Real epsilon() { return Real(NumTraits<S>::epsilon()); }
+  static Real dummy_precision() { return Real(NumTraits<S>::dummy_precision()); }
+  static Real highest() { return Real(NumTraits<S>::highest()); }
+  static Real lowest() { return Real(NumTraits<S>::lowest()); }
+};
+template <typename S, int N, typename BinaryOp>
+struct ScalarBinaryOpTraits<gausstrack::Jet<S, N>, S, BinaryOp> {
+  using ReturnType = gausstrack::Jet<S, N>;
+};
+template <typename S, int N, typename BinaryOp>
+struct ScalarBinaryOpTraits<S, gausstrack::Jet<S, N>, BinaryOp> {
+  using ReturnType = gausstrack::Jet<S, N>;
+};
+}  // namespace Eigen

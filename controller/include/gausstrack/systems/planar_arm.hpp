@@ -1,0 +1,99 @@
+// A planar arm of three revolute links whose end effector tracks a circle: P = 2 constraint rows
+// on N = 3 joints, so Gauss's principle picks, among the infinitely many forces that make the hand
+// follow the circle, the one of least A^-1 norm (eq. 32). The mass matrix depends on q, and the
+// constraint matrix (the hand's Jacobian) loses rank when the arm is stretched or folded.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+
+#include "gausstrack/model.hpp"
+
+namespace gausstrack::systems {
+
+/// q = (q1, q2, q3): relative joint angles [rad]; link i's absolute angle is
+/// theta_i = q1 + ... + qi from the x axis, in the vertical x-y plane with gravity along -y.
+/// Link i has mass m_i, length l_i, its centre of mass at distance r_i from its joint and moment
+/// of inertia I_i about that centre.
+///   A(q) = sum_i m_i Jv_i^T Jv_i + I_i Jw_i^T Jw_i   (Jv_i: centre of mass i, Jw_i = [1 .. 1 0 ..])
+///   f(q, q') = sum_i m_i Jv_i^T (Jv_i' q')           Coriolis and centrifugal forces [N m]
+///   Q(q) = sum_i m_i Jv_i^T (0, -gravity)            gravity, an impressed force [N m]
+/// Constraint: the hand p(q) = sum_i l_i (cos theta_i, sin theta_i) on the circle
+///   phi(q, t) = p(q) - c - R (cos(w t + phase), sin(w t + phase)) = 0   (two rows).
+template <typename Scalar_ = double>
+struct PlanarArm {
+  using Scalar = Scalar_;
+  static constexpr int kDof = 3;
+  static constexpr int kConstraints = 2;
+  static constexpr int kHolonomicRows = 2;
+  using Vector = Eigen::Matrix<Scalar, 3, 1>;
+  using Terms = ModelTerms<3, 2, Scalar>;
+
+  Vector mass{Scalar(2), Scalar(1.5), Scalar(1)};          ///< m_i [kg]
+  Vector length{Scalar(1), Scalar(0.8), Scalar(0.6)};      ///< l_i [m]
+  Vector com{Scalar(0.5), Scalar(0.4), Scalar(0.3)};       ///< r_i [m]
+  Vector inertia{Scalar(1) / 6, Scalar(0.08), Scalar(0.03)};  ///< I_i about the centre [kg m^2]
+  Scalar gravity = Scalar(9.81);                           ///< [m/s^2], along -y
+  // The circle the hand tracks.
+  Scalar center_x = Scalar(1.2), center_y = Scalar(0.6);   ///< c [m]
+  Scalar radius = Scalar(0.3);                             ///< R [m]
+  Scalar rate = Scalar(1.2566370614359172);                ///< w [rad/s] (one turn in 5 s)
+  Scalar phase = Scalar(0);                                ///< [rad]
+
+  void evaluate(const Vector& q, const Vector& qd, Scalar, Terms& terms) const noexcept {
+    // Kinematics shared by A, f and Q: absolute angles, their rates, sines and cosines.
+    Scalar c[3], s[3], w[3];
+    Scalar theta = Scalar(0), omega = Scalar(0);
+    for (int i = 0; i < 3; ++i) {
+      theta += q(i);
+      omega += qd(i);
+      c[i] = std::cos(theta);
+      s[i] = std::sin(theta);
+      w[i] = omega;
+    }
+    terms.mass_matrix.setZero();
+    terms.nonlinear_force.setZero();
+    terms.applied_force.setZero();
+    // Centre of mass i: Jv_i column k (k <= i) is sum_{j=k}^{i-1} l_j (-s_j, c_j) + r_i (-s_i, c_i);
+    // its acceleration at q'' = 0 is -sum_{j<i} l_j w_j^2 (c_j, s_j) - r_i w_i^2 (c_i, s_i).
+    for (int i = 0; i < 3; ++i) {
+      Eigen::Matrix<Scalar, 2, 3> jv = Eigen::Matrix<Scalar, 2, 3>::Zero();
+      Eigen::Matrix<Scalar, 2, 1> bias(-com(i) * w[i] * w[i] * c[i], -com(i) * w[i] * w[i] * s[i]);
+      Eigen::Matrix<Scalar, 2, 1> column(-com(i) * s[i], com(i) * c[i]);
+      for (int k = i; k >= 0; --k) {
+        jv.col(k) = column;
+        if (k > 0) {
+          column += Eigen::Matrix<Scalar, 2, 1>(-length(k - 1) * s[k - 1], length(k - 1) * c[k - 1]);
+          bias -= length(k - 1) * w[k - 1] * w[k - 1] * Eigen::Matrix<Scalar, 2, 1>(c[k - 1], s[k - 1]);
+        }
+      }
+      terms.mass_matrix.noalias() += mass(i) * jv.transpose() * jv;
+      terms.mass_matrix.topLeftCorner(i + 1, i + 1).array() += inertia(i);
+      terms.nonlinear_force.noalias() += mass(i) * jv.transpose() * bias;
+      terms.applied_force -= (mass(i) * gravity) * jv.row(1).transpose();
+    }
+  }
+
+  /// The hand's position p(q) [m].
+  template <typename T>
+  Eigen::Matrix<T, 2, 1> hand(const Eigen::Matrix<T, 3, 1>& q) const {
+    using std::cos, std::sin;
+    T theta = q(0);
+    T x = length(0) * cos(theta), y = length(0) * sin(theta);
+    for (int i = 1; i < 3; ++i) {
+      theta = theta + q(i);
+      x = x + length(i) * cos(theta);
+      y = y + length(i) * sin(theta);
+    }
+    return {x, y};
+  }
+  template <typename T>
+  Eigen::Matrix<T, 2, 1> phi(const Eigen::Matrix<T, 3, 1>& q, const T& t) const {
+    using std::cos, std::sin;
+    const T a = rate * t + phase;
+    const Eigen::Matrix<T, 2, 1> p = hand(q);
+    return {p(0) - (center_x + radius * cos(a)), p(1) - (center_y + radius * sin(a))};
+  }
+};
+
+}  // namespace gausstrack::systems
