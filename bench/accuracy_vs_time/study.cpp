@@ -17,9 +17,11 @@
 //                    without stabilization.
 //   stabilization.csv stabilization gains at 1 kHz, exact model and a plant whose k1 is 10% high.
 // --quick runs a token subset (for CI).
+#ifdef GAUSSTRACK_HAVE_ARKODE
 #include <arkode/arkode_erkstep.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
+#endif
 
 #include <Eigen/Dense>
 #include <boost/numeric/odeint.hpp>
@@ -28,6 +30,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <iterator>
 #include <fstream>
 #include <random>
 #include <string>
@@ -158,10 +161,12 @@ struct DuffingTask {
   Eigen::Vector4d initial() const { return {1.0, 1.0, controller.model().consistent_x1_velocity(2.0), 2.0}; }
 };
 
+#ifdef GAUSSTRACK_HAVE_ARKODE
 int arkode_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {
   static_cast<DuffingTask*>(user)->rhs(N_VGetArrayPointer(y), N_VGetArrayPointer(ydot), t);
   return 0;
 }
+#endif
 
 struct PeerResult {
   Eigen::Vector4d final;
@@ -184,6 +189,7 @@ PeerResult run_odeint(const char* method, double tol, double alpha, double durat
   return {x, task.evaluations, seconds_since(t0)};
 }
 
+#ifdef GAUSSTRACK_HAVE_ARKODE
 PeerResult run_arkode(ARKODE_ERKTableID table, double tol, double alpha, double duration) {
   DuffingTask task(alpha);
   SUNContext ctx = nullptr;
@@ -208,6 +214,7 @@ PeerResult run_arkode(ARKODE_ERKTableID table, double tol, double alpha, double 
   SUNContext_Free(&ctx);
   return r;
 }
+#endif
 
 void peer(std::ofstream& csv, bool quick) {
   csv << "integrator,tolerance,rhs_evaluations,wall_s,final_error\n";
@@ -216,18 +223,28 @@ void peer(std::ofstream& csv, bool quick) {
   for (int e = 4; e <= 13; ++e) {
     if (quick && e % 4 != 0) continue;
     const double tol = std::pow(10.0, -e);
+#ifdef GAUSSTRACK_HAVE_ARKODE
     const PeerResult runs[] = {
         run_odeint("dopri5", tol, alpha, duration), run_arkode(ARKODE_DORMAND_PRINCE_7_4_5, tol, alpha, duration),
         run_odeint("rkf78", tol, alpha, duration), run_arkode(ARKODE_FEHLBERG_13_7_8, tol, alpha, duration)};
     const char* names[] = {"odeint dopri5", "arkode dormand_prince_7_4_5", "odeint rkf78", "arkode fehlberg_13_7_8"};
-    for (int k = 0; k < 4; ++k) {
+#else
+    const PeerResult runs[] = {run_odeint("dopri5", tol, alpha, duration), run_odeint("rkf78", tol, alpha, duration)};
+    const char* names[] = {"odeint dopri5", "odeint rkf78"};
+#endif
+    for (std::size_t k = 0; k < std::size(runs); ++k) {
       char line[256];
       std::snprintf(line, sizeof line, "%s,%g,%ld,%.6g,%.6g\n", names[k], tol, runs[k].evaluations, runs[k].wall_s,
                     (runs[k].final - ref.final).cwiseAbs().maxCoeff());
       csv << line;
     }
   }
+#ifdef GAUSSTRACK_HAVE_ARKODE
   std::printf("  peer: odeint and ARKODE on the Duffing task\n");
+#else
+  std::printf("  peer: odeint only; SUNDIALS ARKODE is not installed (GAUSSTRACK_PEER_STUDY=1 scripts/setup "
+              "installs it; scripts/bench does)\n");
+#endif
 }
 
 // Strategies on one constraint set. The reference force comes from the KKT system in long

@@ -52,7 +52,8 @@ class MessageLog {
   /// Copies one encoded message. Returns false when it was not recorded (too large, or the ring
   /// was full and `wait_if_full` is false); such messages are counted in `dropped()`.
   bool record(int channel, const void* data, std::size_t size, std::int64_t utime, bool wait_if_full) noexcept {
-    if (size > kSlotBytes || channel < 0 || channel >= static_cast<int>(channels_.size())) {
+    if (size > kSlotBytes || channel < 0 || channel >= static_cast<int>(channels_.size()) ||
+        stop_.load(std::memory_order_acquire)) {
       dropped_.fetch_add(1, std::memory_order_relaxed);
       return false;
     }

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <random>
 #include <string>
 
@@ -56,8 +57,9 @@ template <typename DA, typename DB>
   Eigen::Index wi = 0, wj = 0;
   for (Eigen::Index j = 0; j < actual.cols(); ++j)
     for (Eigen::Index i = 0; i < actual.rows(); ++i) {
-      const double d = std::abs(static_cast<double>(actual(i, j)) - static_cast<double>(expected(i, j)));
-      if (!(d <= worst)) {  // also catches NaN
+      double d = std::abs(static_cast<double>(actual(i, j)) - static_cast<double>(expected(i, j)));
+      if (std::isnan(d)) d = std::numeric_limits<double>::infinity();  // a NaN is the worst entry
+      if (d > worst) {
         worst = d;
         wi = i;
         wj = j;

@@ -24,8 +24,10 @@ bool make_consistent(const M& m, Eigen::Matrix<typename M::Scalar, M::kDof, 1>& 
   auto solve = [&](const Eigen::Matrix<S, P, 1>& r, Eigen::Matrix<S, M::kDof, 1>& x) {
     const Eigen::LDLT<Eigen::Matrix<S, P, P>> gram(terms.constraint_matrix * terms.constraint_matrix.transpose());
     if (gram.info() != Eigen::Success || !(gram.vectorD().cwiseAbs().minCoeff() > S(0))) return false;
-    x -= terms.constraint_matrix.transpose() * gram.solve(r);
-    return x.allFinite();
+    const Eigen::Matrix<S, M::kDof, 1> step = terms.constraint_matrix.transpose() * gram.solve(r);
+    if (!step.allFinite()) return false;
+    x -= step;
+    return true;
   };
   bool converged = false;
   for (int it = 0; it < max_iterations; ++it) {

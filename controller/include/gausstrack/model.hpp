@@ -11,8 +11,9 @@
 //   void evaluate(q, qd, t, ModelTerms& terms) const noexcept
 //       fills mass_matrix A (N x N, symmetric positive definite), nonlinear_force f and
 //       applied_force Q (N), and, for the hand-written rows only, their entries of
-//       constraint_matrix D, constraint_rhs g and, optionally, constraint_error e and
-//       constraint_error_rate e'. One call per control step: kinematics shared by A, f, Q and
+//       constraint_matrix D, constraint_rhs g and, optionally, constraint_error_rate e' (and
+//       with it constraint_error e, for a row with a position-level error): what check_model
+//       checks D and g against, and what stabilization acts on. One call per control step: kinematics shared by A, f, Q and
 //       the hand-written rows (an arm's sines and cosines) are computed once.
 //   template <typename T> Eigen::Matrix<T, H, 1> phi(const Eigen::Matrix<T, N, 1>& q, const T& t) const
 //   template <typename T> Eigen::Matrix<T, V, 1> psi(const Eigen::Matrix<T, N, 1>& q,

@@ -78,7 +78,7 @@ class TrackingController {
   using Options = ControllerOptions<Scalar>;
   using Terms = TermsOf<M>;
 
-  /// Throws std::invalid_argument (when exceptions are enabled; aborts otherwise) if
+  /// Throws std::invalid_argument (when exceptions are enabled; traps otherwise) if
   /// `options.validate()` reports a problem.
   explicit TrackingController(M model = M{}, const Options& options = Options{})
       : model_(std::move(model)), options_(options), solver_(options.solver) {
@@ -100,7 +100,9 @@ class TrackingController {
     row_gains_[static_cast<std::size_t>(row)] = gains;
     return true;
   }
-  const Stabilization<Scalar>& stabilization(int row) const noexcept {
+  /// Gains of one row; gains that are off for a row outside [0, P).
+  Stabilization<Scalar> stabilization(int row) const noexcept {
+    if (row < 0 || row >= P) return Stabilization<Scalar>{Scalar(1), Scalar(0)};
     return row_gains_[static_cast<std::size_t>(row)];
   }
   /// The terms of the last compute (A, f, Q, D, g, e, e' at the measured state).
@@ -174,11 +176,10 @@ void gausstrack::TrackingController<M>::config_error(const char* problem) {
   throw std::invalid_argument(std::string("gausstrack::TrackingController: ") + problem);
 }
 #else
-#include <cstdio>
-#include <cstdlib>
+// Without exceptions a bad configuration traps at construction (no stdio, so that firmware links
+// without it); call `options.validate()` first to get the message.
 template <gausstrack::Model M>
-void gausstrack::TrackingController<M>::config_error(const char* problem) {
-  std::fprintf(stderr, "gausstrack::TrackingController: %s\n", problem);
-  std::abort();
+void gausstrack::TrackingController<M>::config_error(const char*) {
+  __builtin_trap();
 }
 #endif
