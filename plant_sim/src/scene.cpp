@@ -329,7 +329,7 @@ Scene read_scene(const Reader& root) {
 
   if (root.has("tracking")) {
     const Reader t = root.child("tracking");
-    t.allow_only({"model", "parameters", "trajectory", "stabilization", "strategy"});
+    t.allow_only({"model", "parameters", "trajectory", "stabilization", "strategy", "force_limit", "min_singular_value"});
     TrackingSpec& tr = s.tracking;
     tr.enabled = true;
     tr.model = t.text("model");
@@ -359,6 +359,8 @@ Scene read_scene(const Reader& root) {
       tr.zeta = st.non_negative("zeta", 1.0);
       tr.stabilization_omega = st.non_negative("omega", 0.0);
     }
+    tr.force_limit = t.positive("force_limit", tr.force_limit);
+    tr.min_singular_value = t.non_negative("min_singular_value", tr.min_singular_value);
     tr.strategy = t.text("strategy", "cholesky");
     if (tr.strategy != "cholesky" && tr.strategy != "svd" && tr.strategy != "cod" && tr.strategy != "damped")
       t.child("strategy").fail("unknown strategy '" + tr.strategy + "' (known: cholesky, svd, cod, damped)");

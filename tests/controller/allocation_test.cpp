@@ -101,7 +101,9 @@ void expect_controller_allocation_free(const M& model) {
   using S = typename M::Scalar;
   ControllerOptions<S> o;
   o.stabilization.omega = S(10);
+  o.solver.min_singular_value = S(1e-3);  // the near-singularity floor and the force limit too
   TrackingController<M> controller(model, o);
+  controller.set_force_limit(Eigen::Matrix<S, M::kDof, 1>::Constant(S(5)));
   typename TrackingController<M>::Output out;
   RandomSource<S> rng(4);
   const Eigen::Matrix<S, M::kDof, 1> q = rng.template matrix<M::kDof, 1>(), qd = rng.template matrix<M::kDof, 1>();

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "gausstrack/plant_sim/scene.hpp"
+#include "gausstrack/plant_sim/scene_controller.hpp"
 
 namespace gausstrack::plant_sim {
 namespace {
@@ -89,6 +90,33 @@ TEST(Scene, BadSetNamesTheOverride) {
     FAIL();
   } catch (const SceneError& e) {
     EXPECT_NE(std::string(e.what()).find("unknown key"), std::string::npos) << e.what();
+  }
+}
+
+// tracking.force_limit and tracking.min_singular_value reach the controller the scene builds (the
+// one the offline simulation and the controller process both use): no force beyond the limit,
+// saturation reported in the warnings the command carries.
+TEST(Scene, ActuatorLimitReachesTheController) {
+  const Scene s = load_scene(kScenes + "/duffing_alpha4.yaml",
+                             {"tracking.force_limit=3", "tracking.min_singular_value=1e-3"});
+  EXPECT_EQ(s.tracking.force_limit, 3.0);
+  EXPECT_EQ(s.tracking.min_singular_value, 1e-3);
+  SceneController c = make_scene_controller(s.tracking);
+  SceneController::Output out;
+  int saturated = 0;
+  for (int i = 0; i < 100; ++i) {
+    const double x = -2.0 + 0.04 * i;
+    ASSERT_EQ(c.compute(Eigen::Vector2d(x, -x), Eigen::Vector2d(1.0, x), 0.01 * i, out), Status::kOk);
+    EXPECT_LE(out.force.cwiseAbs().maxCoeff(), 3.0 * (1 + 1e-12));
+    if (out.diagnostics.has(warning::kSaturated)) ++saturated;
+  }
+  EXPECT_GT(saturated, 10);
+  EXPECT_EQ(load_scene(kScenes + "/duffing_alpha4.yaml").tracking.force_limit, std::numeric_limits<double>::infinity());
+  try {
+    load_scene(kScenes + "/duffing_alpha4.yaml", {"tracking.force_limit=0"});
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("tracking.force_limit: must be > 0"), std::string::npos) << e.what();
   }
 }
 

@@ -86,6 +86,12 @@ struct SolverOptions {
   Scalar residual_tolerance = std::sqrt(kEps);
   /// warning::kIllConditioned when the condition estimate of D A^(-1/2) exceeds this.
   Scalar warn_condition = Scalar(1) / std::sqrt(kEps);
+  /// Absolute floor on the singular values of D A^(-1/2), in the model's own units (row units per
+  /// unit of A^(-1/2) q'', e.g. m / (m sqrt(kg)^-1) for a position row of a point mass): a direction
+  /// whose singular value is below it is treated as lost (warning::kNearSingular) and its share of
+  /// the rows is not enforced, which bounds the force by ||L|| ||g - D a|| / min_singular_value.
+  /// 0 (the default) relies on the relative rank tolerance alone.
+  Scalar min_singular_value = Scalar(0);
 };
 
 /// Diagnostics of one solve. Singular values are those of B = D L^-T, which equal those of
@@ -149,6 +155,7 @@ class ConstraintSolver {
       options_.rank_tolerance = Scalar(std::max(N, P)) * std::numeric_limits<Scalar>::epsilon();
     }
     if (!(options_.damping >= Scalar(0))) options_.damping = Scalar(0);
+    if (!(options_.min_singular_value >= Scalar(0))) options_.min_singular_value = Scalar(0);
   }
   const Options& options() const noexcept { return options_; }
 
@@ -237,9 +244,13 @@ class ConstraintSolver {
 
   // Factor B (held as bt_) with the selected strategy; fills the rank diagnostics.
   void factorize(SolveDiagnostics<Scalar>& diag) noexcept {
+    const Scalar floor = options_.min_singular_value;
     switch (options_.strategy) {
       case InverseStrategy::kCholeskyWithFallback:
-        if (!factorize_normal_equations(Scalar(0), true, diag)) {
+        // The Cholesky factor's diagonal estimates the singular values: near the floor, the SVD
+        // decides exactly which directions to keep.
+        if (!factorize_normal_equations(Scalar(0), true, diag) ||
+            (floor > Scalar(0) && diag.sigma_min_kept < Scalar(2) * floor)) {
           diag.warnings |= warning::kFellBackToSvd;
           factorize_svd(diag);
         }
@@ -248,6 +259,8 @@ class ConstraintSolver {
         if (!factorize_normal_equations(options_.damping * options_.damping, false, diag)) {
           diag.warnings |= warning::kFellBackToSvd;
           factorize_svd(diag);
+        } else if (floor > Scalar(0) && diag.sigma_min_kept < floor) {
+          diag.warnings |= warning::kNearSingular;  // damping already bounds the force
         }
         return;
       case InverseStrategy::kSvd:
@@ -255,6 +268,12 @@ class ConstraintSolver {
         return;
       case InverseStrategy::kCompleteOrthogonal:
         factorize_cod(diag);
+        // Its Z reflectors are built for the rank it found: a direction below the floor is
+        // dropped by the SVD instead.
+        if (floor > Scalar(0) && diag.rank > 0 && diag.sigma_min_kept <= floor) {
+          diag.warnings |= warning::kFellBackToSvd;
+          factorize_svd(diag);
+        }
         return;
     }
   }
@@ -289,8 +308,10 @@ class ConstraintSolver {
     const auto& s = svd_.singularValues();
     rank_ = 0;
     if (s(0) > Scalar(0)) {
-      const Scalar cutoff = options_.rank_tolerance * s(0);
+      const Scalar relative = options_.rank_tolerance * s(0);
+      const Scalar cutoff = std::max(relative, options_.min_singular_value);
       while (rank_ < P && s(rank_) > cutoff) ++rank_;
+      if (rank_ < P && s(rank_) > relative) diag.warnings |= warning::kNearSingular;
     }
     set_rank_diagnostics(diag, s(0), rank_ > 0 ? s(rank_ - 1) : Scalar(0));
   }

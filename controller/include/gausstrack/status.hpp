@@ -39,6 +39,15 @@ inline constexpr std::uint32_t kIllConditioned = 1u << 2;
 /// the full-rank Cholesky path found D A^-1 D^T singular or ill-conditioned and the
 /// rank-revealing SVD path answered instead.
 inline constexpr std::uint32_t kFellBackToSvd = 1u << 3;
+/// a singular value of D A^(-1/2) above the relative rank tolerance but below the absolute floor
+/// `SolverOptions::min_singular_value`: that direction was given up (its rows are not met) so that
+/// the force stays bounded. The physical-scale signal of a near-singular configuration (an arm
+/// stretched, a constraint whose gradient vanishes), which a relative tolerance cannot see when
+/// every row shrinks together.
+inline constexpr std::uint32_t kNearSingular = 1u << 4;
+/// the force exceeded a limit set with TrackingController::set_force_limit and was scaled down
+/// to it (all its parts alike); `ControlOutput::saturation_scale` says by how much.
+inline constexpr std::uint32_t kSaturated = 1u << 5;
 }  // namespace warning
 
 /// Which inputs held a NaN or Inf, as bit flags in `SolveDiagnostics::non_finite_inputs`.

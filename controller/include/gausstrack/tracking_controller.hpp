@@ -3,7 +3,9 @@
 #pragma once
 
 #include <array>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include "gausstrack/constraint_solver.hpp"
@@ -39,6 +41,8 @@ struct ControllerOptions {
       return "stabilization.omega must be finite and >= 0";
     if (!std::isfinite(solver.damping) || solver.damping < Scalar(0))
       return "solver.damping must be finite and >= 0";
+    if (!std::isfinite(solver.min_singular_value) || solver.min_singular_value < Scalar(0))
+      return "solver.min_singular_value must be finite and >= 0";
     if (!std::isfinite(solver.rank_tolerance) || !std::isfinite(solver.fallback_rcond) ||
         !std::isfinite(solver.residual_tolerance) || !std::isfinite(solver.warn_condition))
       return "solver tolerances must be finite";
@@ -58,6 +62,9 @@ struct ControlOutput {
   VectorN feedforward = VectorN::Zero();   ///<                                          [N]
   VectorN stabilizing = VectorN::Zero();   ///< force due to -2 zeta omega e' - omega^2 e  [N]
   VectorN acceleration = VectorN::Zero();  ///< q'' the force produces on the model, eq. (30)
+  /// 1, or the factor the force and its parts were scaled by to meet the force limit
+  /// (warning::kSaturated).
+  Scalar saturation_scale = Scalar(1);
   VectorP constraint_error = VectorP::Zero();       ///< e: phi for holonomic rows, else 0 or the model's
   VectorP constraint_error_rate = VectorP::Zero();  ///< e': phi' or psi, or the model's
   SolveDiagnostics<Scalar> diagnostics;
@@ -105,6 +112,18 @@ class TrackingController {
     if (row < 0 || row >= P) return Stabilization<Scalar>{Scalar(1), Scalar(0)};
     return row_gains_[static_cast<std::size_t>(row)];
   }
+  /// Actuator limits: |force_i| <= limit_i for every published force. A force beyond them is
+  /// scaled down as a whole (its direction and the split into parts kept) and the output says so
+  /// (warning::kSaturated, saturation_scale); q'' is the model's under the applied force. Returns
+  /// false, changing nothing, unless every limit is > 0 (infinity: no limit). Default: no limit.
+  bool set_force_limit(const VectorN& limit) noexcept {
+    for (int i = 0; i < N; ++i)
+      if (!(limit(i) > Scalar(0))) return false;
+    force_limit_ = limit;
+    return true;
+  }
+  const VectorN& force_limit() const noexcept { return force_limit_; }
+
   /// The terms of the last compute (A, f, Q, D, g, e, e' at the measured state).
   const Terms& terms() const noexcept { return terms_; }
 
@@ -145,6 +164,7 @@ class TrackingController {
       out.feedforward.setZero();
       out.stabilizing.setZero();
       out.acceleration.setZero();
+      out.saturation_scale = Scalar(1);
       return status;
     }
     out.force = solution_.constraint_force;
@@ -152,6 +172,21 @@ class TrackingController {
     out.stabilizing = stabilized ? solver_.force_for_rhs(correction) : VectorN::Zero();
     out.feedforward = solution_.force_from_rhs - out.stabilizing;
     out.acceleration = solution_.acceleration;
+    out.saturation_scale = Scalar(1);
+    for (int i = 0; i < N; ++i) {
+      const Scalar magnitude = std::abs(out.force(i));
+      if (magnitude > force_limit_(i)) out.saturation_scale = std::min(out.saturation_scale, force_limit_(i) / magnitude);
+    }
+    if (out.saturation_scale < Scalar(1)) {
+      // q'' = a + A^-1 Q' is affine in Q': scaling the force scales q'' - a alike.
+      const Scalar k = out.saturation_scale;
+      out.force *= k;
+      out.closed_loop *= k;
+      out.feedforward *= k;
+      out.stabilizing *= k;
+      out.acceleration = solution_.unconstrained_acceleration + k * (solution_.acceleration - solution_.unconstrained_acceleration);
+      out.diagnostics.warnings |= warning::kSaturated;
+    }
     return status;
   }
 
@@ -161,6 +196,7 @@ class TrackingController {
   M model_;
   Options options_;
   std::array<Stabilization<Scalar>, static_cast<std::size_t>(P)> row_gains_{};
+  VectorN force_limit_ = VectorN::Constant(std::numeric_limits<Scalar>::infinity());
   Terms terms_{};
   ConstraintSolver<N, P, Scalar> solver_;
   ConstraintSolution<N, P, Scalar> solution_;

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <stdexcept>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -64,6 +65,10 @@ struct TrackingSpec {
   double amplitude = 1, alpha = 4, omega = 6.283185307179586;
   double zeta = 1, stabilization_omega = 0;
   std::string strategy = "cholesky";
+  /// Actuator limit on every coordinate [N]: no command exceeds it (saturation is reported).
+  double force_limit = std::numeric_limits<double>::infinity();
+  /// SolverOptions::min_singular_value: the physical-scale near-singularity floor (0: off).
+  double min_singular_value = 0;
 };
 
 enum class ControlMode : std::uint8_t { kContinuous, kSampled };

@@ -26,7 +26,10 @@ inline SceneController make_scene_controller(const TrackingSpec& t) {
   ControllerOptions<double> o;
   o.solver.strategy = strategy_from(t.strategy);
   o.stabilization = {t.zeta, t.stabilization_omega};
-  return SceneController(m, o);
+  o.solver.min_singular_value = t.min_singular_value;
+  SceneController controller(m, o);
+  controller.set_force_limit(SceneModel::Vector::Constant(t.force_limit));
+  return controller;
 }
 
 }  // namespace gausstrack::plant_sim
