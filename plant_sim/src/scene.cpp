@@ -384,7 +384,7 @@ Scene read_scene(const Reader& root) {
       plant.items("effects")[i].fail("sensor_noise needs control.mode: sampled (noise inside an adaptive integrator is not defined)");
 
   const Reader integ = root.child("integrator");
-  integ.allow_only({"method", "tolerance", "step"});
+  integ.allow_only({"method", "tolerance", "step", "min_step", "max_steps"});
   const std::string method = integ.text("method");
   if (method == "rk4") {
     s.method = Method::kRk4;
@@ -399,6 +399,22 @@ Scene read_scene(const Reader& root) {
   s.duration = root.positive("duration");
   s.output_period = root.positive("output_period");
   if (s.output_period > s.duration) root.child("output_period").fail("must not exceed duration");
+  // What a run can hold: its samples live in memory, and a step must still advance time.
+  constexpr double kMaxSamples = 1e7;
+  if (s.duration / s.output_period > kMaxSamples)
+    root.child("output_period")
+        .fail("gives " + Reader::format(s.duration / s.output_period) + " samples over the duration (at most " +
+              Reader::format(kMaxSamples) + "): raise output_period or shorten duration");
+  if (s.duration * std::numeric_limits<double>::epsilon() * 1e3 > s.output_period)
+    root.child("duration").fail("is too long for its output grid to be resolved in double precision");
+  s.min_step = integ.positive("min_step", 1e-12 * s.duration);
+  s.max_steps = integ.positive("max_steps", s.max_steps);
+  if (s.method == Method::kRk4 && s.duration / s.step > s.max_steps)
+    integ.child("step").fail("gives " + Reader::format(s.duration / s.step) + " steps, above integrator.max_steps (" +
+                             Reader::format(s.max_steps) + ")");
+  if (s.control_mode == ControlMode::kSampled && s.duration * s.control_rate > s.max_steps)
+    root.child("control").fail("gives " + Reader::format(s.duration * s.control_rate) +
+                               " control periods, above integrator.max_steps (" + Reader::format(s.max_steps) + ")");
   if (s.method == Method::kRk4) {
     const double ratio = s.output_period / s.step;
     if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio)

@@ -1,5 +1,6 @@
 // gausstrack-sim SCENE.yaml [--out DIR] [--set key=value ...]
 // Runs a scene in one process and writes DIR/trajectory.csv and DIR/summary.json.
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -9,6 +10,8 @@
 #include "gausstrack/plant_sim/simulation.hpp"
 
 namespace {
+
+volatile std::sig_atomic_t g_interrupted = 0;
 
 int usage(const char* argv0) {
   std::fprintf(stderr, "usage: %s SCENE.yaml [--out DIR] [--set key=value ...]\n", argv0);
@@ -41,6 +44,10 @@ int main(int argc, char** argv) {
     const Scene scene = load_scene(scene_path, sets);
     RunOptions options;
     options.on_progress = terminal_progress(scene);
+    // Ctrl-C (or SIGTERM) stops the run where it is; what it computed is written.
+    std::signal(SIGINT, [](int) { g_interrupted = 1; });
+    std::signal(SIGTERM, [](int) { g_interrupted = 1; });
+    options.stop_requested = [] { return g_interrupted != 0; };
     const RunResult result = run_scene(scene, options);
     std::filesystem::create_directories(out_dir);
     write_trajectory_csv(scene, result, out_dir + "/trajectory.csv");
@@ -57,6 +64,16 @@ int main(int argc, char** argv) {
     if (s.control_failures > 0)
       std::printf("  warning: %llu control evaluations failed (zero force applied)\n",
                   static_cast<unsigned long long>(s.control_failures));
+    const double reached = result.samples.empty() ? 0.0 : result.samples.back().t;
+    if (!s.failure.empty()) {
+      std::fprintf(stderr, "error: %s: %s (samples up to t = %g s written)\n", scene_path.c_str(), s.failure.c_str(),
+                   reached);
+      return 1;
+    }
+    if (g_interrupted) {
+      std::fprintf(stderr, "gausstrack-sim: interrupted; samples up to t = %g s written\n", reached);
+      return 130;
+    }
     return 0;
   } catch (const SceneError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

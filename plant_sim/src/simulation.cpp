@@ -227,7 +227,51 @@ RunResult run(const Scene& s, const RunOptions& options) {
   Rk4 rk4;
   double dt = s.method == Method::kRk4 ? s.step : std::min(1e-3, period);
 
-  for (std::size_t k = 0; k < segments; ++k) {
+  // Guards: a run that cannot go on ends with its reason and keeps what it computed.
+  auto g = [](double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.6g", v);
+    return std::string(b);
+  };
+  auto describe = [&](const State& state) {
+    std::string v = "q = (";
+    for (int i = 0; i < 2 * N; ++i) {
+      if (i == N) v += "), q' = (";
+      else if (i > 0) v += ", ";
+      v += g(state(i));
+    }
+    return v + ")";
+  };
+  auto fail = [&](double t, const std::string& why) {
+    stats.failure = why;
+    stats.failed_at = t;
+  };
+  // true when the step just taken (to time t, new step size h) lets the run go on.
+  auto step_ok = [&](double t, const State& state, double h) {
+    if (!state.allFinite()) {
+      fail(t, "the state left the finite range at t = " + g(t) + " s: " + describe(state));
+      return false;
+    }
+    if (s.method != Method::kRk4 && h < s.min_step) {
+      fail(t, "steps collapsed to " + g(h) + " s (integrator.min_step " + g(s.min_step) +
+                  ") at t = " + g(t) + " s: the plant diverges or is too stiff for the tolerance; " +
+                  describe(state));
+      return false;
+    }
+    if (static_cast<double>(stats.steps) > s.max_steps) {
+      fail(t, "the step budget integrator.max_steps (" + std::to_string(static_cast<long long>(s.max_steps)) +
+                  ") was spent at t = " + g(t) + " s");
+      return false;
+    }
+    if (options.stop_requested && options.stop_requested()) {
+      stats.stopped_early = true;
+      return false;
+    }
+    return true;
+  };
+  bool going = true;
+
+  for (std::size_t k = 0; k < segments && going; ++k) {
     const double t0 = static_cast<double>(k) * period;
     const double t1 = std::min(s.duration, static_cast<double>(k + 1) * period);
     if (sampled) {
@@ -261,8 +305,20 @@ RunResult run(const Scene& s, const RunOptions& options) {
       // Dense output: steps are chosen by the error control alone; samples are interpolated.
       dense.initialize(x, t0, dt);
       while (dense.current_time() < t1 * (1 - 1e-15)) {
-        dense.do_step(rhs);
+        try {
+          dense.do_step(rhs);
+        } catch (const std::exception& e) {  // odeint gives up after 500 rejected steps
+          fail(dense.current_time(), std::string("the integrator could not take a step at t = ") +
+                                         g(dense.current_time()) + " s (" + e.what() + "): " +
+                                         describe(dense.current_state()));
+          going = false;
+          break;
+        }
         ++stats.steps;
+        if (!step_ok(dense.current_time(), dense.current_state(), dense.current_time_step())) {
+          going = false;
+          break;
+        }
         const double reached = std::min(dense.current_time(), t1);
         emit_until(reached, [&](double ts) {
           State xs;
@@ -270,6 +326,7 @@ RunResult run(const Scene& s, const RunOptions& options) {
           return xs;
         });
       }
+      if (!going) break;
       dt = dense.current_time_step();
       if (dense.current_time() > t1) {
         dense.calc_state(t1, x);
@@ -287,7 +344,16 @@ RunResult run(const Scene& s, const RunOptions& options) {
         if (next_sample < sample_count) stop = std::min(stop, sample_time(next_sample));
         const bool clipped = stop - t < dt;
         double h = clipped ? stop - t : dt;
-        if (controlled.try_step(rhs, x, t, h) == odeint::success) {
+        odeint::controlled_step_result step_result = odeint::fail;
+        try {
+          step_result = controlled.try_step(rhs, x, t, h);
+        } catch (const std::exception& e) {
+          fail(t, std::string("the integrator could not take a step at t = ") + g(t) + " s (" +
+                      e.what() + "): " + describe(x));
+          going = false;
+          break;
+        }
+        if (step_result == odeint::success) {
           ++stats.steps;
           if (clipped) {
             t = stop;
@@ -297,12 +363,21 @@ RunResult run(const Scene& s, const RunOptions& options) {
         } else {
           dt = h;
         }
+        if (!step_ok(t, x, clipped ? std::max(h, dt) : dt)) {
+          going = false;
+          break;
+        }
       }
+      if (!going) break;
     } else {
       const auto n_steps = static_cast<long>(std::llround((t1 - t0) / s.step));
       for (long i = 0; i < n_steps; ++i) {
         rk4.do_step(rhs, x, t0 + static_cast<double>(i) * s.step, s.step);
         ++stats.steps;
+        if (!step_ok(t0 + static_cast<double>(i + 1) * s.step, x, s.step)) {
+          going = false;
+          break;
+        }
         emit_until(t0 + static_cast<double>(i + 1) * s.step, [&](double) { return x; });
       }
     }
@@ -435,6 +510,15 @@ void write_summary_json(const Scene& scene, const RunResult& result, const std::
     out << buf;
   };
   out << "{\n  \"scene\": \"" << scene.name << "\",\n";
+  // Whether the run reached its duration; if not, why (a failure) or that it was stopped.
+  std::string failure;
+  for (char c : s.failure) {
+    if (c == '"' || c == '\\') failure += '\\';
+    failure += c;
+  }
+  out << "  \"completed\": " << (s.failure.empty() && !s.stopped_early ? "true" : "false") << ",\n";
+  out << "  \"failure\": " << (s.failure.empty() ? std::string("null") : "\"" + failure + "\"") << ",\n";
+  if (!s.failure.empty()) num("failed_at", s.failed_at);
   num("max_tracking_error", s.max_tracking_error);
   num("rms_tracking_error", s.rms_tracking_error);
   num("max_constraint_residual", s.max_constraint_residual);

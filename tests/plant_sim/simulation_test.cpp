@@ -218,5 +218,71 @@ TEST(Simulation, OutputFilesHaveTheDocumentedColumns) {
     EXPECT_NE(text.find(std::string("\"") + key + "\":"), std::string::npos) << key;
 }
 
+// Runs that cannot finish stop with a clear error naming the time and the quantities involved,
+// and keep what they computed: no hang, no NaN written, no silent success.
+bool samples_finite(const RunResult& r) {
+  for (const Sample& smp : r.samples)
+    for (const auto* v : {&smp.q, &smp.qd, &smp.u})
+      for (double x : *v)
+        if (!std::isfinite(x)) return false;
+  return true;
+}
+
+TEST(RunGuards, DivergingPlantStopsWithItsReason) {
+  // The plant's ground spring softens (cubic stiffness -50) while the controller's model keeps
+  // +2: x2'' ~ 50 x2^3 blows up in finite time, and the adaptive steps collapse.
+  const Scene s = load_scene(kScenes + "/duffing_alpha4.yaml", {"plant.effects.4.stiffness=-50"});
+  const RunResult r = run_scene(s);
+  ASSERT_FALSE(r.summary.failure.empty());
+  std::printf("%s\n", r.summary.failure.c_str());
+  EXPECT_TRUE(r.summary.failure.find("steps collapsed") != std::string::npos ||
+              r.summary.failure.find("finite range") != std::string::npos ||
+              r.summary.failure.find("could not take a step") != std::string::npos)
+      << r.summary.failure;
+  EXPECT_NE(r.summary.failure.find("t = "), std::string::npos);
+  EXPECT_GT(r.summary.failed_at, 0.0);
+  EXPECT_LT(r.summary.failed_at, 10.0);
+  EXPECT_FALSE(r.samples.empty());
+  EXPECT_LT(r.samples.size(), 1001u);
+  EXPECT_TRUE(samples_finite(r));
+}
+
+TEST(RunGuards, OverflowingForcesStopInsteadOfWritingNaN) {
+  for (const char* method : {"dopri5", "rkf78", "rk4"}) {
+    const Scene s = load_scene(kScenes + "/duffing_alpha4.yaml",
+                               {"plant.effects.0.stiffness=1e307", std::string("integrator.method=") + method,
+                                "integrator.step=1e-3"});
+    const RunResult r = run_scene(s);
+    EXPECT_FALSE(r.summary.failure.empty()) << method;
+    EXPECT_TRUE(samples_finite(r)) << method;
+  }
+}
+
+TEST(RunGuards, GridsThatCannotBeHeldAreRejectedUpFront) {
+  for (const char* set : {"duration=1e30", "output_period=1e-9"}) {
+    try {
+      load_scene(kScenes + "/duffing_alpha4.yaml", {set});
+      FAIL() << set;
+    } catch (const SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find("output_period"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(load_scene(kScenes + "/duffing_alpha4.yaml",
+                          {"integrator.method=rk4", "integrator.step=1e-9", "integrator.max_steps=1e6"}),
+               SceneError);
+}
+
+TEST(RunGuards, AStopRequestKeepsTheSamplesSoFar) {
+  const Scene s = load_scene(kScenes + "/duffing_alpha4.yaml");
+  RunOptions o;
+  int polls = 0;
+  o.stop_requested = [&] { return ++polls > 200; };
+  const RunResult r = run_scene(s, o);
+  EXPECT_TRUE(r.summary.stopped_early);
+  EXPECT_TRUE(r.summary.failure.empty());
+  EXPECT_GT(r.samples.size(), 1u);
+  EXPECT_LT(r.samples.size(), 1001u);
+}
+
 }  // namespace
 }  // namespace gausstrack::plant_sim

@@ -88,6 +88,11 @@ struct Scene {
   Method method = Method::kDopri5;
   double tolerance = 1e-10;   ///< absolute and relative local tolerance (adaptive methods)
   double step = 1e-3;         ///< fixed step (rk4) [s]
+  /// Adaptive steps below this end the run with an error (steps collapsing: a diverging or
+  /// stiff plant) [s]; default 1e-12 of the duration.
+  double min_step = 0;
+  /// The most integrator steps a run may take before it ends with an error.
+  double max_steps = 1e8;
   double duration = 10.0;     ///< [s]
   double output_period = 0.01;  ///< [s]
   bool compare_angle_model = false;  ///< pendulum: also integrate the angle-coordinate model

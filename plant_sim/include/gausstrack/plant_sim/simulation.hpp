@@ -32,7 +32,13 @@ struct RunSummary {
   std::uint64_t control_evaluations = 0;
   std::uint64_t control_failures = 0;  ///< controller calls that returned a failure status
   double wall_time_s = 0;
-  bool stopped_early = false;  ///< the external control source ended the run
+  bool stopped_early = false;  ///< the external control source, or a stop request, ended the run
+  /// Why the run could not go on (empty when it completed): steps collapsing below the scene's
+  /// integrator.min_step, the step budget integrator.max_steps spent, or the state leaving the
+  /// finite range; with the time it happened and the quantities involved. The samples up to then
+  /// are kept.
+  std::string failure;
+  double failed_at = 0;  ///< simulated time of the failure [s]
   /// Evaluations of each effect kind (indexed by EffectKind): zero for every kind not listed.
   std::array<std::uint64_t, static_cast<std::size_t>(EffectKind::kCount)> effect_evaluations{};
   // Constant-length pendulum compared with the angle-coordinate model (compare: angle_model).
@@ -56,6 +62,8 @@ struct RunOptions {
   std::function<bool(std::int64_t period, double t, std::span<const double> q, std::span<const double> qd,
                      std::span<double> u)>
       sampled_control;
+  /// Polled between steps: true stops the run where it is (stopped_early), keeping its samples.
+  std::function<bool()> stop_requested;
 };
 
 RunResult run_scene(const Scene& scene, const RunOptions& options = {});
