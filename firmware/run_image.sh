@@ -10,7 +10,7 @@ here=$(cd "$(dirname "$0")" && pwd)
 target=$1 law=$2 out=$3 reference=$4
 name="${target}_${law}"
 mkdir -p "$out"
-rm -f "$out/$name.bin"
+rm -f "$out/$name.bin" "$out/$name.json"
 "$here/build.sh" "$target" "$law" "$out" > /dev/null
 case "$target" in
   m4) machine=mps2-an386 width=4 ;;
@@ -46,7 +46,14 @@ measured=$(awk '/^stack_bytes_measured/ { print $2 }' "$out/$name.txt")
 read -r text data bss <<< "$(arm-none-eabi-size -A "$out/$name.elf" | awk '
   /^\.text|^\.ARM\.exidx|^\.init_array|^\.vectors/ { t += $2 } /^\.data/ { d += $2 } /^\.bss/ { b += $2 }
   END { print t, d, b }')"
-value() { awk -v k="$1" '$1 == k { print $2 }' "$out/$name.txt" "$out/$name.compare.txt"; }
+value() {
+  local v
+  v=$(awk -v k="$1" '$1 == k { print $2 }' "$out/$name.txt" "$out/$name.compare.txt")
+  [ -n "$v" ] || { echo "FAIL: the run did not report $1" >&2; exit 1; }
+  echo "$v"
+}
+for key in law_state_bytes instructions_per_call_min instructions_per_call_mean instructions_per_call_max \
+           max_tracking_error_nm q_max_difference qd_max_difference; do value "$key" > /dev/null; done
 cat > "$out/$name.json" <<JSON
 {"target": "$target", "law": "$law", "flash_bytes": $((text + data)), "ram_bytes": $((data + bss)),
  "law_state_bytes": $(value law_state_bytes), "stack_measured_bytes": $measured, "stack_bound_bytes": $bound,

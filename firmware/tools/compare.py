@@ -33,7 +33,8 @@ def main():
         for name, first in (("q", 1), ("qd", 1 + n), ("u", 1 + 2 * n)):
             for i in range(first, first + n):
                 x, y = a[r * cols + i], b[r * cols + i]
-                worst[name] = max(worst[name], abs(x - y))
+                d = abs(x - y)
+                worst[name] = max(worst[name], d if d == d else float("inf"))  # NaN: the worst
                 scale[name] = max(scale[name], abs(y))
     ok = True
     for name in ("q", "qd"):

@@ -307,6 +307,11 @@ int main(int argc, char** argv) {
                 result.samples.size(), result.summary.max_tracking_error, published, applied, missing, inbox.late(),
                 deadline_misses, watchdog_trips, inbox.rejected(), stats.round_trip_us_p50, stats.round_trip_us_p99,
                 stats.round_trip_us_max, out_dir.c_str());
+    if (!result.summary.failure.empty()) {
+      std::fprintf(stderr, "error: %s (data up to then written to %s)\n", result.summary.failure.c_str(),
+                   out_dir.c_str());
+      return 1;
+    }
     // Interrupted by a signal: the data up to then is written and the run counts as done.
     return result.summary.stopped_early && !g_stop_requested ? 1 : 0;
   } catch (const std::exception& e) {

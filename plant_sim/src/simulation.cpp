@@ -315,16 +315,19 @@ RunResult run(const Scene& s, const RunOptions& options) {
           break;
         }
         ++stats.steps;
+        // Samples up to a finite step are kept even when the run cannot go on after it.
+        if (dense.current_state().allFinite()) {
+          const double reached = std::min(dense.current_time(), t1);
+          emit_until(reached, [&](double ts) {
+            State xs;
+            dense.calc_state(ts, xs);
+            return xs;
+          });
+        }
         if (!step_ok(dense.current_time(), dense.current_state(), dense.current_time_step())) {
           going = false;
           break;
         }
-        const double reached = std::min(dense.current_time(), t1);
-        emit_until(reached, [&](double ts) {
-          State xs;
-          dense.calc_state(ts, xs);
-          return xs;
-        });
       }
       if (!going) break;
       dt = dense.current_time_step();
@@ -364,6 +367,7 @@ RunResult run(const Scene& s, const RunOptions& options) {
           dt = h;
         }
         if (!step_ok(t, x, clipped ? std::max(h, dt) : dt)) {
+          if (x.allFinite()) emit_until(t, [&](double) { return x; });
           going = false;
           break;
         }
@@ -374,11 +378,11 @@ RunResult run(const Scene& s, const RunOptions& options) {
       for (long i = 0; i < n_steps; ++i) {
         rk4.do_step(rhs, x, t0 + static_cast<double>(i) * s.step, s.step);
         ++stats.steps;
+        if (x.allFinite()) emit_until(t0 + static_cast<double>(i + 1) * s.step, [&](double) { return x; });
         if (!step_ok(t0 + static_cast<double>(i + 1) * s.step, x, s.step)) {
           going = false;
           break;
         }
-        emit_until(t0 + static_cast<double>(i + 1) * s.step, [&](double) { return x; });
       }
     }
     if (options.on_progress) {

@@ -1,6 +1,8 @@
 // Singular configurations: a physical-scale floor on the singular values of D A^(-1/2) flags a
 // near-singular solve and bounds its force where a relative rank tolerance cannot see it (every
 // row shrinks together); actuator limits are never exceeded and saturation is reported.
+#include <Eigen/SVD>
+
 #include "gausstrack/systems/planar_arm.hpp"
 #include "gausstrack/tracking_controller.hpp"
 #include "test_support.hpp"
@@ -67,7 +69,7 @@ TEST(SingularConfigurations, VanishingGradientIsFlaggedAndItsForceBounded) {
 // catches only the exact singularity, the floor every configuration near it, for every strategy.
 TEST(SingularConfigurations, ArmThroughItsStretchedConfiguration) {
   for (InverseStrategy s : {InverseStrategy::kCholeskyWithFallback, InverseStrategy::kSvd,
-                            InverseStrategy::kCompleteOrthogonal}) {
+                            InverseStrategy::kCompleteOrthogonal, InverseStrategy::kDampedLeastSquares}) {
     ControllerOptions<double> plain_options, guarded;
     plain_options.solver.strategy = guarded.solver.strategy = s;
     guarded.solver.min_singular_value = 0.05;
@@ -93,6 +95,50 @@ TEST(SingularConfigurations, ArmThroughItsStretchedConfiguration) {
   }
 }
 
+// Against the exact singular values (a Jacobi SVD in the test): every strategy flags exactly the
+// solves with a singular value below the floor and keeps the force under the bound, including
+// nearly parallel rows whose Cholesky diagonal overstates the smallest singular value.
+TEST(SingularConfigurations, EveryStrategyHonoursTheFloor) {
+  RandomSource<double> rng(7);
+  const double floor = 1e-2;
+  for (InverseStrategy s : {InverseStrategy::kCholeskyWithFallback, InverseStrategy::kSvd,
+                            InverseStrategy::kCompleteOrthogonal, InverseStrategy::kDampedLeastSquares}) {
+    SolverOptions<double> o;
+    o.strategy = s;
+    o.min_singular_value = floor;
+    ConstraintSolver<4, 2> solver(o);
+    ConstraintSolution<4, 2> sol;
+    int flagged = 0;
+    for (int it = 0; it < 400; ++it) {
+      const double smallest = std::pow(10.0, rng.uniform(-4, 0));
+      if (std::abs(smallest / floor - 1) < 1e-6) continue;
+      const Eigen::Matrix<double, 2, 4> D = rng.with_singular_values<2, 4>(Eigen::Vector2d(1.0, smallest));
+      const Eigen::Vector4d f = rng.matrix<4, 1>(), Q = rng.matrix<4, 1>();
+      const Eigen::Vector2d g = rng.matrix<2, 1>();
+      ASSERT_EQ(solver.solve(Eigen::Matrix4d::Identity(), f, Q, D, g, sol), Status::kOk);
+      const bool below = Eigen::JacobiSVD<Eigen::Matrix<double, 2, 4>>(D).singularValues()(1) < floor;
+      EXPECT_EQ(sol.diagnostics.has(warning::kNearSingular), below) << to_string(s) << " sigma " << smallest;
+      flagged += below;
+      const double bound = (g - D * (Q - f)).norm() / floor;  // A = I: ||A^(1/2)|| = 1, a = Q - f
+      EXPECT_LE(sol.constraint_force.norm(), bound * (1 + 1e-9)) << to_string(s) << " sigma " << smallest;
+    }
+    EXPECT_GT(flagged, 50) << to_string(s);
+  }
+  // The case where the Cholesky diagonal misleads: rows of norm 0.1 and 1 at 5.7 degrees.
+  const double angle = 0.1;
+  Eigen::Matrix<double, 2, 2> D;
+  D << 0.1, 0.0, std::cos(angle), std::sin(angle);
+  SolverOptions<double> o;
+  o.min_singular_value = 0.02;
+  ConstraintSolver<2, 2> solver(o);
+  ConstraintSolution<2, 2> sol;
+  ASSERT_EQ(solver.solve(Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), D,
+                         Eigen::Vector2d(1.0, -1.0), sol),
+            Status::kOk);
+  EXPECT_TRUE(sol.diagnostics.has(warning::kNearSingular));
+  EXPECT_LE(sol.constraint_force.norm(), std::sqrt(2.0) / 0.02 * (1 + 1e-9));
+}
+
 TEST(ForceLimit, NeverExceededAndReported) {
   RandomSource<double> rng(1);
   using Arm = systems::PlanarArm<double>;
@@ -108,7 +154,7 @@ TEST(ForceLimit, NeverExceededAndReported) {
     const double t = rng.uniform(0, 5);
     ASSERT_EQ(free.compute(q, qd, t, a), Status::kOk);
     ASSERT_EQ(limited.compute(q, qd, t, b), Status::kOk);
-    EXPECT_TRUE((b.force.cwiseAbs().array() <= limit.array() * (1 + 1e-12)).all()) << b.force.transpose();
+    EXPECT_TRUE((b.force.cwiseAbs().array() <= limit.array()).all()) << b.force.transpose();
     const bool over = (a.force.cwiseAbs().array() > limit.array()).any();
     EXPECT_EQ(b.diagnostics.has(warning::kSaturated), over);
     if (!over) {

@@ -244,13 +244,18 @@ class ConstraintSolver {
 
   // Factor B (held as bt_) with the selected strategy; fills the rank diagnostics.
   void factorize(SolveDiagnostics<Scalar>& diag) noexcept {
-    const Scalar floor = options_.min_singular_value;
+    // With a floor on the singular values, every strategy first asks whether B certainly has
+    // none below it; if that cannot be shown, the SVD decides exactly which directions to keep
+    // (and sets kNearSingular when it drops one the relative tolerance would have kept).
+    if (options_.min_singular_value > Scalar(0) && options_.strategy != InverseStrategy::kSvd &&
+        !certainly_above_floor()) {
+      diag.warnings |= warning::kFellBackToSvd;
+      factorize_svd(diag);
+      return;
+    }
     switch (options_.strategy) {
       case InverseStrategy::kCholeskyWithFallback:
-        // The Cholesky factor's diagonal estimates the singular values: near the floor, the SVD
-        // decides exactly which directions to keep.
-        if (!factorize_normal_equations(Scalar(0), true, diag) ||
-            (floor > Scalar(0) && diag.sigma_min_kept < Scalar(2) * floor)) {
+        if (!factorize_normal_equations(Scalar(0), true, diag)) {
           diag.warnings |= warning::kFellBackToSvd;
           factorize_svd(diag);
         }
@@ -259,8 +264,6 @@ class ConstraintSolver {
         if (!factorize_normal_equations(options_.damping * options_.damping, false, diag)) {
           diag.warnings |= warning::kFellBackToSvd;
           factorize_svd(diag);
-        } else if (floor > Scalar(0) && diag.sigma_min_kept < floor) {
-          diag.warnings |= warning::kNearSingular;  // damping already bounds the force
         }
         return;
       case InverseStrategy::kSvd:
@@ -268,15 +271,28 @@ class ConstraintSolver {
         return;
       case InverseStrategy::kCompleteOrthogonal:
         factorize_cod(diag);
-        // Its Z reflectors are built for the rank it found: a direction below the floor is
-        // dropped by the SVD instead.
-        if (floor > Scalar(0) && diag.rank > 0 && diag.sigma_min_kept <= floor) {
-          diag.warnings |= warning::kFellBackToSvd;
-          factorize_svd(diag);
-        }
         return;
     }
   }
+
+  // True when every singular value of B is shown to be >= min_singular_value: with
+  // B B^T = L L^T, sigma_min(B)^2 = lambda_min(B B^T) = 1 / ||L^-1||_2^2 >= 1 / ||L^-1||_F^2.
+  // A sufficient test (it may send a solve to the SVD needlessly, never the other way round).
+  bool certainly_above_floor() noexcept {
+    MatrixPP gram;
+    gram.noalias() = bt_.transpose() * bt_;
+    gram_llt_.compute(gram);
+    if (gram_llt_.info() != Eigen::Success) return false;
+    Scalar inverse_norm2(0);
+    for (int j = 0; j < P; ++j) {
+      VectorP column = VectorP::Unit(j);
+      gram_llt_.matrixL().solveInPlace(column);
+      inverse_norm2 += column.squaredNorm();
+    }
+    const Scalar floor = options_.min_singular_value;
+    return std::isfinite(inverse_norm2) && inverse_norm2 * floor * floor <= Scalar(1);
+  }
+
 
   // LLT of B B^T + lambda2 I = D A^-1 D^T + lambda2 I. Returns false when it is not usable.
   bool factorize_normal_equations(Scalar lambda2, bool require_well_conditioned,

@@ -184,7 +184,10 @@ class TrackingController {
       out.closed_loop *= k;
       out.feedforward *= k;
       out.stabilizing *= k;
-      out.acceleration = solution_.unconstrained_acceleration + k * (solution_.acceleration - solution_.unconstrained_acceleration);
+      out.acceleration = solution_.unconstrained_acceleration +
+                         k * (solution_.acceleration - solution_.unconstrained_acceleration);
+      // Rounding of the scale must not leave a component a last bit above its limit.
+      out.force = out.force.cwiseMax(-force_limit_).cwiseMin(force_limit_);
       out.diagnostics.warnings |= warning::kSaturated;
     }
     return status;
