@@ -139,14 +139,7 @@ int main(int argc, char** argv) {
     stats.compute_ns_p99 = node.compute_ns().quantile(0.99);
     stats.compute_ns_max = node.compute_ns().max();
     stats_outbox.publish_message(stats);
-    long log_dropped = 0;
-    if (log) {
-      log->close();
-      log_dropped = log->dropped();
-      if (log_dropped > 0)
-        std::fprintf(stderr, "gausstrack-controller: warning: %ld messages could not be logged to %s\n",
-                     log_dropped, options.log_path.c_str());
-    }
+    const long log_dropped = close_message_log(log.get(), "gausstrack-controller", options.log_path);
     if (!stats_out.empty()) {
       std::ofstream out(stats_out);
       out << "{\"process\": \"controller\", \"commands_published\": " << node.published()

@@ -270,14 +270,7 @@ int main(int argc, char** argv) {
     stats.wake_late_us_p99 = wake_late_us.quantile(0.99);
     stats.wake_late_us_max = wake_late_us.max();
     stats_out.publish_message(stats);
-    long log_dropped = 0;
-    if (log) {
-      log->close();
-      log_dropped = log->dropped();
-      if (log_dropped > 0)
-        std::fprintf(stderr, "gausstrack-plant: warning: %ld messages could not be logged to %s\n", log_dropped,
-                     options.log_path.c_str());
-    }
+    const long log_dropped = close_message_log(log.get(), "gausstrack-plant", options.log_path);
 
     std::filesystem::create_directories(out_dir);
     write_trajectory_csv(scene, result, out_dir + "/trajectory.csv");

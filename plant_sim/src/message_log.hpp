@@ -152,6 +152,17 @@ class Outbox {
   int log_channel_;
 };
 
+/// Closes the process's log (if it keeps one) and returns how many messages it could not record,
+/// warning on stderr when there were any.
+inline long close_message_log(MessageLog* log, const char* program, const std::string& path) {
+  if (!log) return 0;
+  log->close();
+  const long dropped = log->dropped();
+  if (dropped > 0)
+    std::fprintf(stderr, "%s: warning: %ld messages could not be logged to %s\n", program, dropped, path.c_str());
+  return dropped;
+}
+
 /// The process's log when `path` is not empty, else nullptr.
 inline std::unique_ptr<MessageLog> open_message_log(const std::string& path) {
   return path.empty() ? nullptr : std::make_unique<MessageLog>(path);
