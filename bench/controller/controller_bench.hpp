@@ -24,7 +24,7 @@
 #include <string>
 
 #include "allocation_counter.hpp"
-#include "gausstrack/plant_sim/latency_recorder.hpp"
+#include "gausstrack/nodes/latency_recorder.hpp"
 #include "gausstrack/reference/literal_formulas.hpp"
 #include "gausstrack/tracking_controller.hpp"
 
@@ -52,7 +52,7 @@ struct States {
 /// Runs `call(k)` for the benchmark loop, counting allocations, then times calls one by one.
 template <typename F>
 void measure(benchmark::State& state, F&& call) {
-  static plant_sim::LatencyRecorder ns(1 << 20);  // reserved once, outside every counted region
+  static nodes::LatencyRecorder ns(1 << 20);  // reserved once, outside every counted region
   std::size_t k = 0;
   support::start_counting_allocations();
   for (auto _ : state) call(k++ & 63);

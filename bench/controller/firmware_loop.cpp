@@ -16,14 +16,14 @@
 
 #include "allocation_counter.hpp"
 #include "duffing_closed_form.hpp"
-#include "gausstrack/plant_sim/latency_recorder.hpp"
+#include "gausstrack/nodes/latency_recorder.hpp"
 #include "gausstrack/systems/coupled_duffing.hpp"
 #include "gausstrack/tracking_controller.hpp"
 
 namespace {
 
 using Duffing = gausstrack::systems::CoupledDuffing<double>;
-using gausstrack::plant_sim::LatencyRecorder;
+using gausstrack::nodes::LatencyRecorder;
 
 std::int64_t now_ns() {
   timespec t{};

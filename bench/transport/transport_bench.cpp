@@ -22,12 +22,12 @@
 #include <vector>
 
 #include "gausstrack/control_command_t.hpp"
-#include "gausstrack/plant_sim/latency_recorder.hpp"
+#include "gausstrack/nodes/latency_recorder.hpp"
 #include "gausstrack/plant_state_t.hpp"
 
 namespace {
 
-using gausstrack::plant_sim::LatencyRecorder;
+using gausstrack::nodes::LatencyRecorder;
 
 std::int64_t now_ns() {
   timespec t{};

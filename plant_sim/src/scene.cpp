@@ -1,5 +1,7 @@
 #include "gausstrack/plant_sim/scene.hpp"
 
+#include "gausstrack/plant_sim/models.hpp"
+
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -50,6 +52,15 @@ class Reader {
     }
     out << ": " << message;
     throw SceneError(out.str());
+  }
+
+  /// "file:line: key" of this node, as error messages start.
+  std::string where() const {
+    std::ostringstream out;
+    out << *file_;
+    if (overridden_->count(path_)) out << ": --set " << path_;
+    else out << ":" << (node_.Mark().line + 1) << ": " << path_;
+    return out.str();
   }
 
   std::string key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
@@ -280,13 +291,70 @@ ConstraintSpec read_constraint(const Reader& r, const std::vector<std::string>& 
   return c;
 }
 
+std::vector<ModelParameter> read_parameters(const Reader& r) {
+  r.require_map();
+  std::vector<ModelParameter> out;
+  for (const auto& kv : r.node()) {
+    const std::string k = kv.first.as<std::string>();
+    const Reader v = r.child(k.c_str());
+    out.push_back({k, v.as_number(), v.where()});
+  }
+  return out;
+}
+
+// Parameter names of a compiled-in model are checked with the scene (file, line, key).
+void check_parameter_names(const Reader& parent, const char* key, const ModelFactory& f) {
+  if (!parent.has(key)) return;
+  const Reader r = parent.child(key);
+  for (const auto& kv : r.node()) {
+    const std::string k = kv.first.as<std::string>();
+    if (std::find(f.parameter_names.begin(), f.parameter_names.end(), k) == f.parameter_names.end()) {
+      std::string known;
+      for (const auto& p : f.parameter_names) known += (known.empty() ? "" : ", ") + p;
+      r.fail_at(kv.first, r.key_path(k), "model '" + f.name + "' has no parameter '" + k + "' (known: " + known + ")");
+    }
+  }
+}
+
+TrackingSpec read_tracking(const Reader& t) {
+  t.allow_only({"model", "parameters", "trajectory", "stabilization", "strategy", "force_limit", "min_singular_value"});
+  TrackingSpec tr;
+  tr.enabled = true;
+  tr.model = t.text("model");
+  tr.where = t.child("model").where();
+  // The trajectory's parameters are the model's too; they are kept apart in scenes for reading.
+  for (const char* section : {"parameters", "trajectory"})
+    if (t.has(section)) {
+      const auto p = read_parameters(t.child(section));
+      tr.parameters.insert(tr.parameters.end(), p.begin(), p.end());
+    }
+  if (const ModelFactory* f = find_builtin_model(tr.model)) {
+    check_parameter_names(t, "parameters", *f);
+    check_parameter_names(t, "trajectory", *f);
+  } else if (tr.model.empty()) {
+    t.child("model").fail("must name a model");
+  }
+  if (t.has("stabilization")) {
+    const Reader st = t.child("stabilization");
+    st.allow_only({"zeta", "omega"});
+    tr.zeta = st.non_negative("zeta", 1.0);
+    tr.stabilization_omega = st.non_negative("omega", 0.0);
+  }
+  tr.force_limit = t.positive("force_limit", tr.force_limit);
+  tr.min_singular_value = t.non_negative("min_singular_value", tr.min_singular_value);
+  tr.strategy = t.text("strategy", "cholesky");
+  if (tr.strategy != "cholesky" && tr.strategy != "svd" && tr.strategy != "cod" && tr.strategy != "damped")
+    t.child("strategy").fail("unknown strategy '" + tr.strategy + "' (known: cholesky, svd, cod, damped)");
+  return tr;
+}
+
 Scene read_scene(const Reader& root) {
   Scene s;
   root.allow_only({"name", "plant", "tracking", "control", "integrator", "duration", "output_period", "compare"});
   s.name = root.text("name", "");
 
   const Reader plant = root.child("plant");
-  plant.allow_only({"coordinates", "masses", "initial", "effects", "constraints"});
+  plant.allow_only({"coordinates", "masses", "model", "parameters", "initial", "effects", "constraints"});
   for (const Reader& c : plant.items("coordinates")) {
     if (!c.node().IsScalar() || c.node().Scalar().empty()) c.fail("must be a coordinate name");
     const std::string n = c.node().Scalar();
@@ -296,14 +364,29 @@ Scene read_scene(const Reader& root) {
     s.coordinates.push_back(n);
   }
   const int n = s.dof();
-  if (n < 2 || n > 3) plant.child("coordinates").fail("plants with 2 or 3 coordinates are supported (got " + std::to_string(n) + ")");
-  const auto masses = plant.items("masses");
-  if (static_cast<int>(masses.size()) != n)
-    plant.child("masses").fail("needs one mass per coordinate (" + std::to_string(n) + "), got " + std::to_string(masses.size()));
-  for (const Reader& m : masses) {
-    const double v = m.as_number();
-    if (!(v > 0)) m.fail("mass must be > 0 (got " + Reader::format(v) + ")");
-    s.masses.push_back(v);
+  if (n < 1 || n > kMaxCoordinates)
+    plant.child("coordinates").fail("a plant has 1 to " + std::to_string(kMaxCoordinates) + " coordinates (got " + std::to_string(n) + ")");
+  if (plant.has("model")) {
+    // The plant is a model's own dynamics (A, f, Q); the effects listed add to them.
+    if (plant.has("masses")) plant.child("masses").fail("a plant is either point masses or a model, not both");
+    s.plant_model = plant.text("model");
+    s.plant_model_where = plant.child("model").where();
+    if (plant.has("parameters")) s.plant_parameters = read_parameters(plant.child("parameters"));
+    if (const ModelFactory* f = find_builtin_model(s.plant_model)) {
+      if (f->dof != n)
+        plant.child("coordinates").fail("model '" + s.plant_model + "' has " + std::to_string(f->dof) + " coordinates, the plant lists " + std::to_string(n));
+      check_parameter_names(plant, "parameters", *f);
+    }
+  } else {
+    if (plant.has("parameters")) plant.child("parameters").fail("parameters belong to a plant model (plant.model)");
+    const auto masses = plant.items("masses");
+    if (static_cast<int>(masses.size()) != n)
+      plant.child("masses").fail("needs one mass per coordinate (" + std::to_string(n) + "), got " + std::to_string(masses.size()));
+    for (const Reader& m : masses) {
+      const double v = m.as_number();
+      if (!(v > 0)) m.fail("mass must be > 0 (got " + Reader::format(v) + ")");
+      s.masses.push_back(v);
+    }
   }
   const Reader initial = plant.child("initial");
   initial.require_map();
@@ -318,52 +401,23 @@ Scene read_scene(const Reader& root) {
     s.qd0.push_back(initial.number(("qd" + std::to_string(i)).c_str(), 0.0));
   }
   if (plant.has("effects"))
-    for (const Reader& e : plant.items("effects")) s.effects.push_back(read_effect(e, s.coordinates));
-  if (plant.has("constraints"))
-    for (const Reader& c : plant.items("constraints")) {
-      s.constraints.push_back(read_constraint(c, s.coordinates));
-      if (s.constraints.back().kind == ConstraintKind::kNonholonomic && n != 3)
-        c.fail("the nonholonomic constraint needs 3 coordinates");
+    for (const Reader& e : plant.items("effects")) {
+      s.effects.push_back(read_effect(e, s.coordinates));
+      if (s.effects.back().kind == EffectKind::kGravity && !s.plant_model.empty())
+        e.fail("gravity acts on point masses; a plant model's gravity is its own (a model parameter)");
     }
-  if (s.constraints.size() > 1) plant.child("constraints").fail("at most one physical constraint is supported");
+  if (plant.has("constraints"))
+    for (const Reader& c : plant.items("constraints")) s.constraints.push_back(read_constraint(c, s.coordinates));
+  if (static_cast<int>(s.constraints.size()) >= n)
+    plant.child("constraints").fail("needs fewer constraints than coordinates");
 
   if (root.has("tracking")) {
-    const Reader t = root.child("tracking");
-    t.allow_only({"model", "parameters", "trajectory", "stabilization", "strategy", "force_limit", "min_singular_value"});
-    TrackingSpec& tr = s.tracking;
-    tr.enabled = true;
-    tr.model = t.text("model");
-    if (tr.model != "coupled_duffing") t.child("model").fail("unknown controller model '" + tr.model + "' (known: coupled_duffing)");
-    if (n != 2) t.child("model").fail("coupled_duffing needs a plant with 2 coordinates");
-    if (!s.constraints.empty()) t.fail("tracking control of a plant with physical constraints is not supported");
-    if (t.has("parameters")) {
-      const Reader p = t.child("parameters");
-      p.allow_only({"m1", "m2", "k1", "k2", "kb1", "kb2", "c1", "c2"});
-      tr.m1 = p.positive("m1", tr.m1);
-      tr.m2 = p.positive("m2", tr.m2);
-      tr.k1 = p.number("k1", tr.k1);
-      tr.k2 = p.number("k2", tr.k2);
-      tr.kb1 = p.number("kb1", tr.kb1);
-      tr.kb2 = p.number("kb2", tr.kb2);
-      tr.c1 = p.number("c1", tr.c1);
-      tr.c2 = p.number("c2", tr.c2);
-    }
-    const Reader tj = t.child("trajectory");
-    tj.allow_only({"amplitude", "alpha", "omega"});
-    tr.amplitude = tj.number("amplitude");
-    tr.alpha = tj.number("alpha");
-    tr.omega = tj.number("omega");
-    if (t.has("stabilization")) {
-      const Reader st = t.child("stabilization");
-      st.allow_only({"zeta", "omega"});
-      tr.zeta = st.non_negative("zeta", 1.0);
-      tr.stabilization_omega = st.non_negative("omega", 0.0);
-    }
-    tr.force_limit = t.positive("force_limit", tr.force_limit);
-    tr.min_singular_value = t.non_negative("min_singular_value", tr.min_singular_value);
-    tr.strategy = t.text("strategy", "cholesky");
-    if (tr.strategy != "cholesky" && tr.strategy != "svd" && tr.strategy != "cod" && tr.strategy != "damped")
-      t.child("strategy").fail("unknown strategy '" + tr.strategy + "' (known: cholesky, svd, cod, damped)");
+    s.tracking = read_tracking(root.child("tracking"));
+    if (const ModelFactory* f = find_builtin_model(s.tracking.model))
+      if (f->dof != n)
+        root.child("tracking").child("model").fail("model '" + s.tracking.model + "' has " + std::to_string(f->dof) +
+                                                   " coordinates, the plant has " + std::to_string(n));
+    if (!s.constraints.empty()) root.child("tracking").fail("tracking control of a plant with physical constraints is not supported");
   }
 
   if (root.has("control")) {
@@ -437,27 +491,50 @@ Scene read_scene(const Reader& root) {
 
 }  // namespace
 
-Scene parse_scene(const std::string& yaml_text, const std::string& name, const std::vector<std::string>& overrides) {
+namespace {
+
+// Parses YAML text and applies the overrides; the readers then see one tree.
+Reader parse_root(const std::string& yaml_text, const std::string& name, const std::vector<std::string>& overrides) {
   YAML::Node root;
   try {
     root = YAML::Load(yaml_text);
   } catch (const YAML::Exception& e) {
     throw SceneError(name + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
   }
-  if (!root.IsMap()) throw SceneError(name + ":1: a scene must be a mapping of keys to values");
+  if (!root.IsMap()) throw SceneError(name + ":1: must be a mapping of keys to values");
   auto overridden = std::make_shared<std::set<std::string>>();
   for (const std::string& o : overrides) apply_override(root, o, name, *overridden);
-  Scene s = read_scene(Reader(root, "", std::make_shared<const std::string>(name), overridden));
+  return Reader(root, "", std::make_shared<const std::string>(name), overridden);
+}
+
+std::string read_file(const std::string& path, const char* what) {
+  std::ifstream in(path);
+  if (!in) throw SceneError(path + ": cannot open " + what);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace
+
+Scene parse_scene(const std::string& yaml_text, const std::string& name, const std::vector<std::string>& overrides) {
+  Scene s = read_scene(parse_root(yaml_text, name, overrides));
   s.file = name;
   return s;
 }
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
-  std::ifstream in(path);
-  if (!in) throw SceneError(path + ": cannot open scene file");
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_scene(text.str(), path, overrides);
+  return parse_scene(read_file(path, "scene file"), path, overrides);
+}
+
+TrackingSpec parse_tracking(const std::string& yaml_text, const std::string& name,
+                            const std::vector<std::string>& overrides) {
+  const Reader root = parse_root(yaml_text, name, overrides);
+  return read_tracking(root.child("tracking"));
+}
+
+TrackingSpec load_tracking(const std::string& path, const std::vector<std::string>& overrides) {
+  return parse_tracking(read_file(path, "configuration file"), path, overrides);
 }
 
 }  // namespace gausstrack::plant_sim

@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/QR>
 #include <boost/numeric/odeint.hpp>
 #include <boost/numeric/odeint/external/eigen/eigen.hpp>
 #include <chrono>
@@ -16,22 +18,44 @@
 #include <stdexcept>
 
 #include "gausstrack/constraint_solver.hpp"
-#include "gausstrack/plant_sim/scene_controller.hpp"
+#include "gausstrack/plant_sim/models.hpp"
 
 namespace gausstrack::plant_sim {
 namespace {
 
 namespace odeint = boost::numeric::odeint;
 
-// The plant assembled from exactly the scene's effects and physical constraint. Its physics is
-// written here from the scene's description, independently of controller/.../systems.
-template <int N>
+using V = Eigen::VectorXd;
+using M = Eigen::MatrixXd;
+
+// The model of that name: one the run was given (RunOptions::models), else a compiled-in one.
+const ModelFactory& find_model(const Scene& s, const RunOptions& o, const std::string& name, const std::string& where) {
+  for (const ModelFactory& f : o.models)
+    if (f.name == name) return f;
+  if (const ModelFactory* f = find_builtin_model(name)) return *f;
+  throw SceneError(where + ": unknown model '" + name + "' (compiled in: " + builtin_model_names() +
+                   (o.models.empty() ? std::string() : "; given to this run: " + [&] {
+                     std::string n;
+                     for (const ModelFactory& f : o.models) n += (n.empty() ? "" : ", ") + f.name;
+                     return n;
+                   }()) + ")");
+}
+
+// The plant assembled from exactly the scene's description: point masses or a model's own
+// dynamics, the effects listed and the physical constraints listed. Its constraint rows are
+// written here and solved as a Lagrange-multiplier (KKT) system, independently of the
+// controller's ConstraintSolver, so that plant and controller check each other.
 class Plant {
  public:
-  using V = Eigen::Matrix<double, N, 1>;
-
-  explicit Plant(const Scene& s) {
-    for (int i = 0; i < N; ++i) mass_(i) = s.masses[static_cast<std::size_t>(i)];
+  Plant(const Scene& s, const RunOptions& o) : n_(s.dof()) {
+    if (!s.plant_model.empty()) {
+      model_ = find_model(s, o, s.plant_model, s.plant_model_where).plant(s.plant_parameters);
+      if (model_->dof() != n_)
+        throw SceneError(s.plant_model_where + ": model '" + s.plant_model + "' has " +
+                         std::to_string(model_->dof()) + " coordinates, the plant lists " + std::to_string(n_));
+    } else {
+      mass_ = Eigen::Map<const V>(s.masses.data(), n_);
+    }
     for (const EffectSpec& e : s.effects) {
       switch (e.kind) {
         case EffectKind::kActuatorSaturation: saturation_ = e; break;
@@ -42,12 +66,17 @@ class Plant {
         default: forces_.push_back(e);
       }
     }
-    if (!s.constraints.empty()) constraint_ = s.constraints.front();
+    constraints_ = s.constraints;
+    A_.setZero(n_, n_);
+    f_.setZero(n_);
+    Q_.setZero(n_);
   }
+
+  int dof() const { return n_; }
 
   // Generalized impressed force Q(q, q', t) from the force effects listed, and nothing else.
   V applied_force(const V& q, const V& qd, double t, RunSummary& stats) const {
-    V Q = V::Zero();
+    V Q = V::Zero(n_);
     for (const EffectSpec& e : forces_) {
       ++stats.effect_evaluations[static_cast<std::size_t>(e.kind)];
       const double xb = e.b == kGround ? 0.0 : q(e.b), vb = e.b == kGround ? 0.0 : qd(e.b);
@@ -77,95 +106,127 @@ class Plant {
   void measure(V& q, V& qd, RunSummary& stats) {
     if (!noise_) return;
     ++stats.effect_evaluations[static_cast<std::size_t>(EffectKind::kSensorNoise)];
-    std::normal_distribution<double> n(0.0, noise_->value);
-    for (int i = 0; i < N; ++i) {
-      q(i) += n(rng_);
-      qd(i) += n(rng_);
+    std::normal_distribution<double> nd(0.0, noise_->value);
+    for (int i = 0; i < n_; ++i) {
+      q(i) += nd(rng_);
+      qd(i) += nd(rng_);
     }
   }
 
-  // Eq. (31): q'' = A^-1 (Q + u) when unconstrained, else the Udwadia-Kalaba acceleration with
-  // the physical constraint D q'' = g.
-  V acceleration(const V& q, const V& qd, double t, const V& u, RunSummary& stats) {
-    const V Q = applied_force(q, qd, t, stats) + u;
-    if (!constraint_) return Q.cwiseQuotient(mass_);
-    Eigen::Matrix<double, 1, N> D = Eigen::Matrix<double, 1, N>::Zero();
-    double g = 0;
-    const auto& c = constraint_->coordinates;
-    if (constraint_->kind == ConstraintKind::kPendulumLength) {
+  // Constraint k's row: D_k q'' = g_k, with D_k = grad phi_k (or the Pfaffian row) and g_k the
+  // rest of phi_k'' (or psi_k') moved to the right.
+  void constraint_row(const ConstraintSpec& c, const V& q, const V& qd, Eigen::RowVectorXd& D, double& g) const {
+    D.setZero(n_);
+    const auto& k = c.coordinates;
+    if (c.kind == ConstraintKind::kPendulumLength) {
       // phi = x^2 + y^2 - L^2 + mu L^2 sin(x^2); D = grad phi; g = -q'^T Hess(phi) q'.
-      const double x = q(c[0]), y = q(c[1]), xd = qd(c[0]), yd = qd(c[1]);
-      const double l2mu = constraint_->length * constraint_->length * constraint_->mu;
-      D(c[0]) = 2 * x + 2 * l2mu * x * std::cos(x * x);
-      D(c[1]) = 2 * y;
+      const double x = q(k[0]), y = q(k[1]), xd = qd(k[0]), yd = qd(k[1]);
+      const double l2mu = c.length * c.length * c.mu;
+      D(k[0]) = 2 * x + 2 * l2mu * x * std::cos(x * x);
+      D(k[1]) = 2 * y;
       const double hxx = 2 + 2 * l2mu * (std::cos(x * x) - 2 * x * x * std::sin(x * x));
       g = -(hxx * xd * xd + 2 * yd * yd);
     } else {
       // y' - z x' = 0 differentiated: y'' - z x'' = z' x'.
-      D(c[0]) = -q(c[2]);
-      D(c[1]) = 1;
-      g = qd(c[2]) * qd(c[0]);
+      D(k[0]) = -q(k[2]);
+      D(k[1]) = 1;
+      g = qd(k[2]) * qd(k[0]);
     }
-    const Eigen::Matrix<double, 1, 1> gv(g);
-    solver_.solve(mass_.asDiagonal().toDenseMatrix(), V::Zero(), Q, D, gv, solution_);
-    return solution_.acceleration;  // zero (and counted by the caller) if the solve failed
+  }
+
+  // Eq. (31) by Lagrange multipliers: [A D^T; D 0] (q'', -lambda) = (Q + u - f, g).
+  V acceleration(const V& q, const V& qd, double t, const V& u, RunSummary& stats) {
+    V rhs = applied_force(q, qd, t, stats) + u;
+    if (model_) {
+      model_->evaluate(q, qd, t, A_, f_, Q_);
+      rhs += Q_ - f_;
+    }
+    const int p = static_cast<int>(constraints_.size());
+    if (p == 0) {
+      if (!model_) return rhs.cwiseQuotient(mass_);
+      llt_.compute(A_);
+      if (llt_.info() != Eigen::Success) return V::Constant(n_, std::numeric_limits<double>::quiet_NaN());
+      return llt_.solve(rhs);
+    }
+    kkt_.setZero(n_ + p, n_ + p);
+    if (model_) kkt_.topLeftCorner(n_, n_) = A_;
+    else kkt_.topLeftCorner(n_, n_).diagonal() = mass_;
+    V b(n_ + p);
+    b.head(n_) = rhs;
+    for (int k = 0; k < p; ++k) {
+      double g = 0;
+      constraint_row(constraints_[static_cast<std::size_t>(k)], q, qd, row_, g);
+      kkt_.block(n_ + k, 0, 1, n_) = row_;
+      kkt_.block(0, n_ + k, n_, 1) = row_.transpose();
+      b(n_ + k) = g;
+    }
+    // Rank-revealing, so that a configuration where the rows lose rank still gives the
+    // least-squares multipliers rather than a division by zero.
+    kkt_solver_.compute(kkt_);
+    return kkt_solver_.solve(b).head(n_);
   }
 
   double constraint_residual(const V& q, const V& qd) const {
-    if (!constraint_) return 0;
-    const auto& c = constraint_->coordinates;
-    if (constraint_->kind == ConstraintKind::kPendulumLength) {
-      const double x = q(c[0]), y = q(c[1]), L = constraint_->length;
-      return x * x + y * y - L * L * (1 - constraint_->mu * std::sin(x * x));
+    double worst = 0;
+    for (const ConstraintSpec& c : constraints_) {
+      const auto& k = c.coordinates;
+      double r = 0;
+      if (c.kind == ConstraintKind::kPendulumLength) {
+        const double x = q(k[0]), y = q(k[1]), L = c.length;
+        r = x * x + y * y - L * L * (1 - c.mu * std::sin(x * x));
+      } else {
+        r = qd(k[1]) - q(k[2]) * qd(k[0]);
+      }
+      if (std::abs(r) > std::abs(worst)) worst = r;
     }
-    return qd(c[1]) - q(c[2]) * qd(c[0]);
+    return worst;
   }
 
  private:
+  int n_;
   V mass_;
+  std::unique_ptr<PlantModel> model_;
+  M A_;
+  V f_, Q_;
   std::vector<EffectSpec> forces_;
   std::optional<EffectSpec> saturation_, noise_;
-  std::optional<ConstraintSpec> constraint_;
+  std::vector<ConstraintSpec> constraints_;
   std::mt19937_64 rng_;
-  ConstraintSolver<N, 1> solver_;
-  ConstraintSolution<N, 1> solution_;
+  Eigen::LLT<M> llt_;
+  M kkt_;
+  Eigen::RowVectorXd row_;
+  Eigen::CompleteOrthogonalDecomposition<M> kkt_solver_;
 };
 
-template <int N>
+// The scene's tracking controller (none without a tracking section).
 struct Control {
-  std::optional<SceneController> controller;
-  SceneController::Output out;
+  std::unique_ptr<ControlLaw> law;
 
-  explicit Control(const Scene& s) {
-    if constexpr (N == 2) {
-      if (s.tracking.enabled) controller.emplace(make_scene_controller(s.tracking));
-    }
+  Control(const Scene& s, const RunOptions& o) {
+    if (!s.tracking.enabled) return;
+    law = find_model(s, o, s.tracking.model, s.tracking.where).control_law(s.tracking);
+    if (law->dof() != s.dof())
+      throw SceneError(s.tracking.where + ": model '" + s.tracking.model + "' has " + std::to_string(law->dof()) +
+                       " coordinates, the plant has " + std::to_string(s.dof()));
   }
 
-  Eigen::Matrix<double, N, 1> force(const Eigen::Matrix<double, N, 1>& q, const Eigen::Matrix<double, N, 1>& qd,
-                                    double t, RunSummary& stats) {
-    if constexpr (N == 2) {
-      if (controller) {
-        ++stats.control_evaluations;
-        if (failed(controller->compute(q, qd, t, out))) ++stats.control_failures;
-        return out.force;  // zero on failure
-      }
+  V force(const V& q, const V& qd, double t, RunSummary& stats) {
+    V u = V::Zero(q.size());
+    if (law) {
+      ++stats.control_evaluations;
+      if (failed(law->compute(q.data(), qd.data(), t, u.data()))) ++stats.control_failures;
     }
-    return Eigen::Matrix<double, N, 1>::Zero();
+    return u;  // zero on failure
   }
 
-  double tracking_error(const Eigen::Matrix<double, N, 1>& q, double t) const {
-    if constexpr (N == 2) {
-      if (controller) return controller->model().phi(q, t)(0);
-    }
-    return 0;
+  double tracking_error(const V& q, const V& qd, double t) const {
+    return law ? law->tracking_error(q.data(), qd.data(), t) : 0.0;
   }
 };
 
-template <int N>
 RunResult run(const Scene& s, const RunOptions& options) {
-  using V = Eigen::Matrix<double, N, 1>;
-  using State = Eigen::Matrix<double, 2 * N, 1>;
+  using State = Eigen::VectorXd;
+  const int N = s.dof();
   if (options.sampled_control && s.control_mode != ControlMode::kSampled)
     throw SceneError(s.file + ": control from another process needs control.mode: sampled");
   const auto wall_start = std::chrono::steady_clock::now();
@@ -174,19 +235,19 @@ RunResult run(const Scene& s, const RunOptions& options) {
   RunSummary& stats = result.summary;
   const auto sample_count = static_cast<std::size_t>(std::floor(s.duration / s.output_period + 1e-9)) + 1;
   result.samples.reserve(sample_count);
-  Plant<N> plant(s);
-  Control<N> control(s);
+  Plant plant(s, options);
+  Control control(s, options);
 
   const bool sampled = s.control_mode == ControlMode::kSampled;
-  V held = V::Zero();  // the control force held over the current control period
+  V held = V::Zero(N);  // the control force held over the current control period
   auto rhs = [&](const State& x, State& dxdt, double t) {
     ++stats.rhs_evaluations;
-    const V q = x.template head<N>(), qd = x.template tail<N>();
+    const V q = x.head(N), qd = x.tail(N);
     const V u = sampled ? held : plant.saturate(control.force(q, qd, t, stats), stats);
     dxdt << qd, plant.acceleration(q, qd, t, u, stats);
   };
 
-  State x;
+  State x(2 * N);
   for (int i = 0; i < N; ++i) {
     x(i) = s.q0[static_cast<std::size_t>(i)];
     x(N + i) = s.qd0[static_cast<std::size_t>(i)];
@@ -197,7 +258,7 @@ RunResult run(const Scene& s, const RunOptions& options) {
   auto record = [&](const State& state, double t) {
     Sample smp;
     smp.t = t;
-    const V q = state.template head<N>(), qd = state.template tail<N>();
+    const V q = state.head(N), qd = state.tail(N);
     V u = held;
     if (!sampled) {
       RunSummary scratch;  // recording must not count as simulation work
@@ -206,7 +267,7 @@ RunResult run(const Scene& s, const RunOptions& options) {
     smp.q.assign(q.data(), q.data() + N);
     smp.qd.assign(qd.data(), qd.data() + N);
     smp.u.assign(u.data(), u.data() + N);
-    smp.tracking_error = control.tracking_error(q, t);
+    smp.tracking_error = control.tracking_error(q, qd, t);
     smp.constraint_residual = plant.constraint_residual(q, qd);
     stats.max_tracking_error = std::max(stats.max_tracking_error, std::abs(smp.tracking_error));
     stats.max_constraint_residual = std::max(stats.max_constraint_residual, std::abs(smp.constraint_residual));
@@ -275,13 +336,13 @@ RunResult run(const Scene& s, const RunOptions& options) {
     const double t0 = static_cast<double>(k) * period;
     const double t1 = std::min(s.duration, static_cast<double>(k + 1) * period);
     if (sampled) {
-      V q = x.template head<N>(), qd = x.template tail<N>();
+      V q = x.head(N), qd = x.tail(N);
       plant.measure(q, qd, stats);
       if (options.sampled_control) {
         // The force comes from elsewhere (a controller process); the run stops when it says so.
-        V u = V::Zero();
-        if (!options.sampled_control(static_cast<std::int64_t>(k), t0, std::span<const double>(q.data(), N),
-                                     std::span<const double>(qd.data(), N), std::span<double>(u.data(), N))) {
+        V u = V::Zero(N);
+        if (!options.sampled_control(static_cast<std::int64_t>(k), t0, std::span<const double>(q.data(), q.size()),
+                                     std::span<const double>(qd.data(), qd.size()), std::span<double>(u.data(), u.size()))) {
           stats.stopped_early = true;
           break;
         }
@@ -319,7 +380,7 @@ RunResult run(const Scene& s, const RunOptions& options) {
         if (dense.current_state().allFinite()) {
           const double reached = std::min(dense.current_time(), t1);
           emit_until(reached, [&](double ts) {
-            State xs;
+            State xs(2 * N);
             dense.calc_state(ts, xs);
             return xs;
           });
@@ -429,42 +490,35 @@ RunResult run(const Scene& s, const RunOptions& options) {
   return result;
 }
 
-template <int N>
-Eigen::Matrix<double, N, 1> to_vector(const std::vector<double>& v, const Scene& s) {
-  if (static_cast<int>(v.size()) != N)
-    throw std::invalid_argument(s.file + ": expected " + std::to_string(N) + " values, got " + std::to_string(v.size()));
-  return Eigen::Map<const Eigen::Matrix<double, N, 1>>(v.data());
+V to_vector(const std::vector<double>& v, const Scene& s) {
+  if (static_cast<int>(v.size()) != s.dof())
+    throw std::invalid_argument(s.file + ": expected " + std::to_string(s.dof()) + " values, got " + std::to_string(v.size()));
+  return Eigen::Map<const V>(v.data(), s.dof());
 }
 
-template <int N>
 std::vector<double> evaluate(const Scene& s, const std::vector<double>& q, const std::vector<double>& qd, double t,
                              const std::vector<double>* u) {
-  Plant<N> plant(s);
+  Plant plant(s, RunOptions{});
   RunSummary stats;
-  const Eigen::Matrix<double, N, 1> r =
-      u ? plant.acceleration(to_vector<N>(q, s), to_vector<N>(qd, s), t, to_vector<N>(*u, s), stats)
-        : plant.applied_force(to_vector<N>(q, s), to_vector<N>(qd, s), t, stats);
-  return {r.data(), r.data() + N};
+  const V r = u ? plant.acceleration(to_vector(q, s), to_vector(qd, s), t, to_vector(*u, s), stats)
+                : plant.applied_force(to_vector(q, s), to_vector(qd, s), t, stats);
+  return {r.data(), r.data() + r.size()};
 }
 
 }  // namespace
 
 std::vector<double> plant_applied_force(const Scene& scene, const std::vector<double>& q,
                                         const std::vector<double>& qd, double t) {
-  return scene.dof() == 2 ? evaluate<2>(scene, q, qd, t, nullptr) : evaluate<3>(scene, q, qd, t, nullptr);
+  return evaluate(scene, q, qd, t, nullptr);
 }
 
 std::vector<double> plant_acceleration(const Scene& scene, const std::vector<double>& q,
                                        const std::vector<double>& qd, double t, const std::vector<double>& u) {
-  return scene.dof() == 2 ? evaluate<2>(scene, q, qd, t, &u) : evaluate<3>(scene, q, qd, t, &u);
+  return evaluate(scene, q, qd, t, &u);
 }
 
 RunResult run_scene(const Scene& scene, const RunOptions& options) {
-  switch (scene.dof()) {
-    case 2: return run<2>(scene, options);
-    case 3: return run<3>(scene, options);
-    default: throw SceneError(scene.file + ": plants with 2 or 3 coordinates are supported");
-  }
+  return run(scene, options);
 }
 
 void write_trajectory_csv(const Scene& scene, const RunResult& result, const std::string& path) {

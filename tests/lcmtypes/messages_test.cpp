@@ -53,8 +53,7 @@ TEST(Messages, ControlCommandRoundTrips) {
   c.dimension = 2;
   c.force[0] = -42.4;
   c.force[1] = 42.4;
-  c.closed_loop[0] = -8.9;
-  c.feedforward[0] = -33.5;
+  c.run_id = 0x1234567890LL;
   c.status = 0;
   c.warnings = 8;
   c.compute_ns = 150;
@@ -65,7 +64,7 @@ TEST(Messages, ControlCommandRoundTrips) {
   ASSERT_EQ(d.decode(buf.data(), 0, size), size);
   EXPECT_EQ(d.state_sequence, 42);
   EXPECT_EQ(d.force[1], 42.4);
-  EXPECT_EQ(d.feedforward[0], -33.5);
+  EXPECT_EQ(d.run_id, 0x1234567890LL);
   EXPECT_EQ(d.warnings, 8);
 }
 

@@ -5,7 +5,8 @@
 #include <string>
 
 #include "gausstrack/plant_sim/scene.hpp"
-#include "gausstrack/plant_sim/scene_controller.hpp"
+#include "gausstrack/plant_sim/models.hpp"
+#include "gausstrack/systems/coupled_duffing.hpp"
 
 namespace gausstrack::plant_sim {
 namespace {
@@ -31,7 +32,7 @@ const BadScene kBadScenes[] = {
     {"unknown_integrator.yaml", ":8: integrator.method", "unknown integrator 'euler'"},
     {"zero_tolerance.yaml", ":8: integrator.tolerance", "must be > 0"},
     {"unknown_initial_key.yaml", ":5: plant.initial.q3", "unknown key"},
-    {"missing_trajectory_field.yaml", ":13: tracking.trajectory", "missing required key 'omega'"},
+    {"unknown_model_parameter.yaml", ":13: tracking.trajectory.omgea", "model 'coupled_duffing' has no parameter 'omgea'"},
     {"malformed_yaml.yaml", ":8", "not valid YAML"},
     {"sampled_without_rate.yaml", ":11: control", "missing required key 'rate'"},
     {"noise_without_sampling.yaml", ":7: plant.effects[0]", "sensor_noise needs control.mode: sampled"},
@@ -61,7 +62,7 @@ TEST(Scene, ShippedDuffingSceneHasThePaperValues) {
   EXPECT_EQ(s.masses, (std::vector<double>{2.0, 1.0}));
   EXPECT_EQ(s.effects.size(), 6u);
   EXPECT_TRUE(s.tracking.enabled);
-  EXPECT_EQ(s.tracking.alpha, 4.0);
+  EXPECT_EQ(s.tracking.parameter("alpha", 0.0), 4.0);
   // x1'(0) = d + A omega makes the initial state consistent with the trajectory.
   EXPECT_NEAR(s.qd0[0], 2.0 + 2.0 * 3.141592653589793, 1e-15);
 }
@@ -101,8 +102,8 @@ TEST(Scene, ActuatorLimitReachesTheController) {
                              {"tracking.force_limit=3", "tracking.min_singular_value=1e-3"});
   EXPECT_EQ(s.tracking.force_limit, 3.0);
   EXPECT_EQ(s.tracking.min_singular_value, 1e-3);
-  SceneController c = make_scene_controller(s.tracking);
-  SceneController::Output out;
+  auto c = make_controller<systems::CoupledDuffing<double>>(s.tracking);
+  decltype(c)::Output out;
   int saturated = 0;
   for (int i = 0; i < 100; ++i) {
     const double x = -2.0 + 0.04 * i;

@@ -32,6 +32,13 @@ struct CoupledDuffing {
   Scalar c1 = Scalar(0.1), c2 = Scalar(0.15);    ///< [N s/m]
   DecayingSine<Scalar> trajectory{};
 
+  /// Visits every parameter by name (for configuration files): f(name, reference).
+  template <typename F>
+  void parameters(F&& f) {
+    f("m1", m1), f("m2", m2), f("k1", k1), f("k2", k2), f("kb1", kb1), f("kb2", kb2), f("c1", c1), f("c2", c2);
+    f("amplitude", trajectory.amplitude), f("alpha", trajectory.alpha), f("omega", trajectory.omega);
+  }
+
   void evaluate(const Vector& q, const Vector& qd, Scalar, Terms& terms) const noexcept {
     terms.mass_matrix(0, 0) = m1;
     terms.mass_matrix(1, 1) = m2;

@@ -30,6 +30,21 @@ struct DuffingChain {
   Scalar c1 = Scalar(0.1), c2 = Scalar(0.15);
   std::array<DecayingSine<Scalar>, P> trajectories{};
 
+  /// Visits every parameter by name: f(name, reference); row j's trajectory is amplitude_j,
+  /// alpha_j, omega_j (j = 1..P).
+  template <typename F>
+  void parameters(F&& f) {
+    f("m1", m1), f("m2", m2), f("k1", k1), f("k2", k2), f("kb1", kb1), f("kb2", kb2), f("c1", c1), f("c2", c2);
+    static constexpr const char* kNames[3][8] = {
+        {"amplitude_1", "amplitude_2", "amplitude_3", "amplitude_4", "amplitude_5", "amplitude_6", "amplitude_7", "amplitude_8"},
+        {"alpha_1", "alpha_2", "alpha_3", "alpha_4", "alpha_5", "alpha_6", "alpha_7", "alpha_8"},
+        {"omega_1", "omega_2", "omega_3", "omega_4", "omega_5", "omega_6", "omega_7", "omega_8"}};
+    for (int j = 0; j < P && j < 8; ++j) {
+      auto& s = trajectories[static_cast<std::size_t>(j)];
+      f(kNames[0][j], s.amplitude), f(kNames[1][j], s.alpha), f(kNames[2][j], s.omega);
+    }
+  }
+
   void evaluate(const Vector& q, const Vector& qd, Scalar, Terms& terms) const noexcept {
     for (int i = 0; i < N; ++i) terms.mass_matrix(i, i) = (i % 2 == 0) ? m1 : m2;
     Vector& f = terms.nonlinear_force;

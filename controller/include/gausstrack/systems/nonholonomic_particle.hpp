@@ -22,6 +22,12 @@ struct NonholonomicParticle {
 
   Scalar mass = Scalar(1);  ///< [kg]
 
+  /// Visits every parameter by name: f(name, reference).
+  template <typename F>
+  void parameters(F&& f) {
+    f("mass", mass);
+  }
+
   void evaluate(const Vector&, const Vector&, Scalar, Terms& terms) const noexcept {
     terms.mass_matrix.diagonal().setConstant(mass);
   }

@@ -27,6 +27,12 @@ struct Pendulum {
   Scalar gravity = Scalar(4) * std::numbers::pi_v<Scalar>;  ///< g [m/s^2]
   Scalar mu = Scalar(0);                                   ///< length nonlinearity [-]
 
+  /// Visits every parameter by name: f(name, reference).
+  template <typename F>
+  void parameters(F&& f) {
+    f("mass", mass), f("length", length), f("gravity", gravity), f("mu", mu);
+  }
+
   void evaluate(const Vector&, const Vector&, Scalar, Terms& terms) const noexcept {
     terms.mass_matrix.diagonal().setConstant(mass);
     terms.applied_force(1) = mass * gravity;

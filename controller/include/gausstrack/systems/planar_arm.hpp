@@ -40,6 +40,20 @@ struct PlanarArm {
   Scalar rate = Scalar(1.2566370614359172);                ///< w [rad/s] (one turn in 5 s)
   Scalar phase = Scalar(0);                                ///< [rad]
 
+  /// Visits every parameter by name: f(name, reference); link i's are mass_i, length_i, com_i,
+  /// inertia_i (i = 1..3).
+  template <typename F>
+  void parameters(F&& f) {
+    static constexpr const char* kNames[4][3] = {{"mass_1", "mass_2", "mass_3"},
+                                                 {"length_1", "length_2", "length_3"},
+                                                 {"com_1", "com_2", "com_3"},
+                                                 {"inertia_1", "inertia_2", "inertia_3"}};
+    for (int i = 0; i < 3; ++i)
+      f(kNames[0][i], mass(i)), f(kNames[1][i], length(i)), f(kNames[2][i], com(i)), f(kNames[3][i], inertia(i));
+    f("gravity", gravity), f("center_x", center_x), f("center_y", center_y), f("radius", radius);
+    f("rate", rate), f("phase", phase);
+  }
+
   void evaluate(const Vector& q, const Vector& qd, Scalar, Terms& terms) const noexcept {
     // Kinematics shared by A, f and Q: absolute angles, their rates, sines and cosines.
     Scalar c[3], s[3], w[3];

@@ -19,6 +19,7 @@ class SceneError : public std::runtime_error {
 };
 
 inline constexpr int kGround = -1;  ///< coordinate index meaning "attached to ground"
+inline constexpr int kMaxCoordinates = 32;  ///< the messages' MAX_DIMENSION
 
 /// The physical effects a scene may name. Only the named ones are built and evaluated.
 enum class EffectKind : std::uint8_t {
@@ -56,19 +57,34 @@ struct ConstraintSpec {
   double mu = 0.0;
 };
 
+/// One named model parameter from a scene, with where it was written (for error messages).
+struct ModelParameter {
+  std::string name;
+  double value = 0;
+  std::string where;  ///< "file:line: dotted.key"
+};
+
 /// The tracking task: the controller's own model of the plant (which may differ from the plant
-/// on purpose) and the trajectory it imposes.
+/// on purpose), its parameters (the trajectory's included) and how the law is computed. A
+/// controller process reads only this section.
 struct TrackingSpec {
   bool enabled = false;
-  std::string model;  ///< "coupled_duffing"
-  double m1 = 2, m2 = 1, k1 = 10, k2 = 12, kb1 = 1, kb2 = 2, c1 = 0.1, c2 = 0.15;
-  double amplitude = 1, alpha = 4, omega = 6.283185307179586;
+  std::string model;                     ///< a compiled-in model's name, or a user's
+  std::string where;                     ///< where `model` was written
+  std::vector<ModelParameter> parameters;  ///< tracking.parameters, then tracking.trajectory
   double zeta = 1, stabilization_omega = 0;
   std::string strategy = "cholesky";
   /// Actuator limit on every coordinate [N]: no command exceeds it (saturation is reported).
   double force_limit = std::numeric_limits<double>::infinity();
   /// SolverOptions::min_singular_value: the physical-scale near-singularity floor (0: off).
   double min_singular_value = 0;
+
+  /// The value of a parameter the scene sets, or `fallback`.
+  double parameter(const std::string& name, double fallback) const {
+    for (const ModelParameter& p : parameters)
+      if (p.name == name) return p.value;
+    return fallback;
+  }
 };
 
 enum class ControlMode : std::uint8_t { kContinuous, kSampled };
@@ -78,7 +94,12 @@ struct Scene {
   std::string file;
   std::string name;
   std::vector<std::string> coordinates;
+  /// Point masses (one per coordinate), or empty when the plant is a model (plant.model): then
+  /// A, f and Q are that model's and the effects add to them.
   std::vector<double> masses;
+  std::string plant_model;                       ///< plant.model: a model's name
+  std::string plant_model_where;
+  std::vector<ModelParameter> plant_parameters;  ///< plant.parameters (model mismatch)
   std::vector<double> q0, qd0;
   std::vector<EffectSpec> effects;
   std::vector<ConstraintSpec> constraints;
@@ -108,5 +129,11 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 /// The same from YAML text; `name` stands for the file in messages.
 Scene parse_scene(const std::string& yaml_text, const std::string& name,
                   const std::vector<std::string>& overrides = {});
+
+/// A controller's own configuration: the `tracking` section of a file (a whole scene, or a file
+/// holding only that section); nothing else in the file is read. Throws SceneError.
+TrackingSpec load_tracking(const std::string& path, const std::vector<std::string>& overrides = {});
+TrackingSpec parse_tracking(const std::string& yaml_text, const std::string& name,
+                            const std::vector<std::string>& overrides = {});
 
 }  // namespace gausstrack::plant_sim

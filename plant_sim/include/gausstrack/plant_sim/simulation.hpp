@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "gausstrack/plant_sim/models.hpp"
 #include "gausstrack/plant_sim/scene.hpp"
 
 namespace gausstrack::plant_sim {
@@ -62,6 +63,9 @@ struct RunOptions {
   std::function<bool(std::int64_t period, double t, std::span<const double> q, std::span<const double> qd,
                      std::span<double> u)>
       sampled_control;
+  /// Models the scene may name (tracking.model, plant.model) besides the compiled-in ones: how a
+  /// user's own model runs, e.g. models = {model_factory<MyModel>("my_model")}.
+  std::vector<ModelFactory> models;
   /// Polled between steps: true stops the run where it is (stopped_early), keeping its samples.
   std::function<bool()> stop_requested;
 };

@@ -26,7 +26,7 @@
 #include <thread>
 #include <vector>
 
-namespace gausstrack::plant_sim {
+namespace gausstrack::nodes {
 
 class MessageLog {
  public:
@@ -168,4 +168,4 @@ inline std::unique_ptr<MessageLog> open_message_log(const std::string& path) {
   return path.empty() ? nullptr : std::make_unique<MessageLog>(path);
 }
 
-}  // namespace gausstrack::plant_sim
+}  // namespace gausstrack::nodes

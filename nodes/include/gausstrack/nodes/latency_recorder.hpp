@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace gausstrack::plant_sim {
+namespace gausstrack::nodes {
 
 /// Recording never allocates: values past the reserved count are counted as dropped, not kept.
 class LatencyRecorder {
@@ -52,4 +52,4 @@ class LatencyRecorder {
   std::size_t dropped_ = 0;
 };
 
-}  // namespace gausstrack::plant_sim
+}  // namespace gausstrack::nodes

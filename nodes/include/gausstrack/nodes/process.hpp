@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-namespace gausstrack::plant_sim {
+namespace gausstrack::nodes {
 
 inline volatile std::sig_atomic_t g_stop_requested = 0;
 
@@ -45,12 +45,13 @@ inline timespec to_timespec(std::int64_t ns) {
 }
 
 struct ProcessOptions {
-  std::string scene_path;
+  std::string scene_path;           ///< --scene (the plant's scene; the controller's --config)
   std::vector<std::string> sets;  ///< scene overrides, key=value
   std::string lcm_url;            ///< empty: LCM_DEFAULT_URL, else LCM's own default
   std::string state_channel = "GAUSSTRACK_STATE";
   std::string command_channel = "GAUSSTRACK_COMMAND";
   std::string stats_channel = "GAUSSTRACK_STATS";
+  std::string diagnostics_channel = "GAUSSTRACK_DIAGNOSTICS";
   int rt_priority = 0;        ///< SCHED_FIFO priority; 0 keeps the default scheduler
   int cpu = -1;               ///< pin to this CPU; -1 leaves affinity alone
   bool lock_memory = false;   ///< mlockall(MCL_CURRENT | MCL_FUTURE)
@@ -60,7 +61,7 @@ struct ProcessOptions {
 
 inline constexpr const char* kCommonUsage =
     "--scene S [--set key=value ...] [--lcm-url URL] [--state-channel C] [--command-channel C] "
-    "[--stats-channel C] [--rt-priority P] [--cpu K] [--lock-memory] [--log FILE [--log-wait]]";
+    "[--stats-channel C] [--diagnostics-channel C] [--rt-priority P] [--cpu K] [--lock-memory] [--log FILE [--log-wait]]";
 
 /// Consumes argv[i] (and its value) if it is a common option. Returns false if it is not one;
 /// a common option with a missing or malformed value sets `error`.
@@ -68,7 +69,7 @@ inline bool parse_common_option(int argc, char** argv, int& i, ProcessOptions& o
   const std::string a = argv[i];
   if (a == "--lock-memory") return o.lock_memory = true;
   if (a == "--log-wait") return o.log_wait = true;
-  const bool takes_value = a == "--scene" || a == "--set" || a == "--lcm-url" || a == "--state-channel" ||
+  const bool takes_value = a == "--scene" || a == "--config" || a == "--diagnostics-channel" || a == "--set" || a == "--lcm-url" || a == "--state-channel" ||
                            a == "--command-channel" || a == "--stats-channel" || a == "--rt-priority" ||
                            a == "--cpu" || a == "--log";
   if (!takes_value) return false;
@@ -86,7 +87,8 @@ inline bool parse_common_option(int argc, char** argv, int& i, ProcessOptions& o
     else
       out = static_cast<int>(x);
   };
-  if (a == "--scene") o.scene_path = v;
+  if (a == "--scene" || a == "--config") o.scene_path = v;
+  else if (a == "--diagnostics-channel") o.diagnostics_channel = v;
   else if (a == "--set") o.sets.push_back(v);
   else if (a == "--lcm-url") o.lcm_url = v;
   else if (a == "--state-channel") o.state_channel = v;
@@ -121,4 +123,4 @@ inline void apply_realtime(const ProcessOptions& o, const char* program) {
   }
 }
 
-}  // namespace gausstrack::plant_sim
+}  // namespace gausstrack::nodes

@@ -1,0 +1,127 @@
+// The wire codec: moves q, q' and forces between the LCM messages and Eigen vectors of N
+// coordinates, checking what arrives. N is fixed at compile time (a model's kDof), or
+// Eigen::Dynamic for a dimension chosen at run time (a plant from a scene): its vectors then
+// live in bounded storage of the messages' 32 entries. Encoding and decoding allocate nothing
+// and throw nothing.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "gausstrack/control_command_t.hpp"
+#include "gausstrack/control_diagnostics_t.hpp"
+#include "gausstrack/plant_state_t.hpp"
+
+namespace gausstrack::nodes {
+
+inline constexpr int kMaxDimension = plant_state_t::MAX_DIMENSION;
+static_assert(control_command_t::MAX_DIMENSION == kMaxDimension &&
+              control_diagnostics_t::MAX_DIMENSION == kMaxDimension);
+
+/// q, q' or a force on the wire's side: fixed size N, or at most 32 entries without allocation.
+template <int N>
+using WireVector = Eigen::Matrix<double, N, 1, Eigen::ColMajor, N == Eigen::Dynamic ? kMaxDimension : N, 1>;
+
+/// Why a message was refused (each is counted by the nodes).
+enum class Refusal : std::uint8_t {
+  kNone,
+  kMalformed,  ///< does not decode as the expected type (truncated, foreign, corrupt)
+  kDimension,  ///< a dimension other than the receiver's
+  kNonFinite,  ///< NaN or infinity in a value the receiver would use
+};
+
+inline const char* to_string(Refusal r) noexcept {
+  switch (r) {
+    case Refusal::kNone: return "none";
+    case Refusal::kMalformed: return "malformed";
+    case Refusal::kDimension: return "wrong dimension";
+    case Refusal::kNonFinite: return "non-finite";
+  }
+  return "unknown";
+}
+
+template <int N>
+class Codec {
+ public:
+  static_assert(N == Eigen::Dynamic || (N >= 1 && N <= kMaxDimension), "the messages carry 1..32 coordinates");
+  using Vector = WireVector<N>;
+
+  /// `dimension` must be N for a fixed N; 1..32 for Eigen::Dynamic (checked by valid()).
+  explicit Codec(int dimension = N) noexcept : n_(dimension) {}
+  bool valid() const noexcept { return n_ >= 1 && n_ <= kMaxDimension && (N == Eigen::Dynamic || n_ == N); }
+  int dimension() const noexcept { return n_; }
+
+  /// Decodes a plant state into `msg` and its q, q'.
+  Refusal decode_state(const void* data, std::size_t size, plant_state_t& msg, Vector& q, Vector& qd) const noexcept {
+    if (size > static_cast<std::size_t>(INT32_MAX) || msg.decode(data, 0, static_cast<int>(size)) < 0)
+      return Refusal::kMalformed;
+    if (msg.dimension != n_) return Refusal::kDimension;
+    if (!std::isfinite(msg.t)) return Refusal::kNonFinite;
+    q = Eigen::Map<const Vector>(msg.q, n_);
+    qd = Eigen::Map<const Vector>(msg.qd, n_);
+    if (!q.allFinite() || !qd.allFinite()) return Refusal::kNonFinite;
+    return Refusal::kNone;
+  }
+
+  /// Decodes a command into `msg` and its force. A failed solve's command is accepted (its force
+  /// is zero and its status says why); a non-finite force is refused.
+  Refusal decode_command(const void* data, std::size_t size, control_command_t& msg, Vector& force) const noexcept {
+    if (size > static_cast<std::size_t>(INT32_MAX) || msg.decode(data, 0, static_cast<int>(size)) < 0)
+      return Refusal::kMalformed;
+    if (msg.dimension != n_) return Refusal::kDimension;
+    force = Eigen::Map<const Vector>(msg.force, n_);
+    if (!force.allFinite()) return Refusal::kNonFinite;
+    return Refusal::kNone;
+  }
+
+  /// Fills the state message (entries past the dimension zero) and encodes it into `buffer`.
+  /// Returns the encoded size, or -1 if the buffer is too small.
+  template <typename Q, typename Qd>
+  int encode_state(plant_state_t& msg, const Eigen::MatrixBase<Q>& q, const Eigen::MatrixBase<Qd>& qd,
+                   std::uint8_t* buffer, std::size_t capacity) const noexcept {
+    msg.dimension = n_;
+    for (int i = 0; i < kMaxDimension; ++i) {
+      msg.q[i] = i < n_ ? q(i) : 0.0;
+      msg.qd[i] = i < n_ ? qd(i) : 0.0;
+    }
+    return encode(msg, buffer, capacity);
+  }
+
+  template <typename F>
+  int encode_command(control_command_t& msg, const Eigen::MatrixBase<F>& force, std::uint8_t* buffer,
+                     std::size_t capacity) const noexcept {
+    msg.dimension = n_;
+    for (int i = 0; i < kMaxDimension; ++i) msg.force[i] = i < n_ ? force(i) : 0.0;
+    return encode(msg, buffer, capacity);
+  }
+
+  template <typename A, typename B, typename C>
+  int encode_diagnostics(control_diagnostics_t& msg, const Eigen::MatrixBase<A>& closed_loop,
+                         const Eigen::MatrixBase<B>& feedforward, const Eigen::MatrixBase<C>& stabilizing,
+                         std::uint8_t* buffer, std::size_t capacity) const noexcept {
+    msg.dimension = n_;
+    for (int i = 0; i < kMaxDimension; ++i) {
+      msg.closed_loop[i] = i < n_ ? closed_loop(i) : 0.0;
+      msg.feedforward[i] = i < n_ ? feedforward(i) : 0.0;
+      msg.stabilizing[i] = i < n_ ? stabilizing(i) : 0.0;
+    }
+    return encode(msg, buffer, capacity);
+  }
+
+ private:
+  template <typename Message>
+  static int encode(const Message& msg, std::uint8_t* buffer, std::size_t capacity) noexcept {
+    const int size = msg.getEncodedSize();
+    if (size < 0 || static_cast<std::size_t>(size) > capacity) return -1;
+    return msg.encode(buffer, 0, size) == size ? size : -1;
+  }
+
+  int n_;
+};
+
+/// Encoded sizes of the messages are fixed (their arrays are): a buffer of this size holds any.
+inline constexpr std::size_t kMessageBufferBytes = 4096;
+
+}  // namespace gausstrack::nodes

@@ -1,0 +1,132 @@
+// ControllerNode<Model>: the controller process's work, for any model. Subscribe it to the
+// plant's states; for each state it validates, computes the control law and publishes the
+// command at once:
+//
+//   lcm::LCM lcm;
+//   Outbox commands(lcm, "GAUSSTRACK_COMMAND", nullptr, false);
+//   ControllerNode<MyModel> node(make_controller<MyModel>(spec), commands);
+//   lcm.subscribe("GAUSSTRACK_STATE", &ControllerNode<MyModel>::on_state, &node);
+//   while (!g_stop_requested) lcm.handleTimeout(100);
+//
+// Wire contract:
+// - A state that does not decode, has another dimension or a non-finite value is counted and
+//   dropped; so is one of the current plant run whose sequence is not newer than the last.
+// - A state with a new run_id is a new plant run (a restarted plant): its sequence starts again
+//   and it is served.
+// - Every served state gets one command: the force, or all zeros with the status of a failed
+//   solve, which the plant applies as zero (never the previous force).
+// - The force's parts and the solve's figures go to the diagnostics outbox, if one is given.
+// The path from receipt to publish allocates nothing.
+#pragma once
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include "gausstrack/model.hpp"
+#include "gausstrack/nodes/codec.hpp"
+#include "gausstrack/nodes/latency_recorder.hpp"
+#include "gausstrack/nodes/message_log.hpp"
+#include "gausstrack/nodes/process.hpp"
+#include "gausstrack/tracking_controller.hpp"
+
+namespace gausstrack::nodes {
+
+/// What the controller node counted.
+struct ControllerCounts {
+  long served = 0;      ///< states answered with a command
+  long failed = 0;      ///< commands reporting a failed solve (force zero)
+  long rejected = 0;    ///< states refused (any reason below)
+  long malformed = 0, wrong_dimension = 0, non_finite = 0, stale = 0;
+  long runs = 0;        ///< plant runs seen
+};
+
+template <Model M>
+class ControllerNode {
+ public:
+  static constexpr int N = M::kDof;
+  using Controller = TrackingController<M>;
+
+  /// `compute_times`: how many compute times to keep for percentiles (later ones are counted
+  /// only). `diagnostics`: where to publish each command's diagnostics, or nullptr.
+  ControllerNode(Controller controller, Outbox& commands, Outbox* diagnostics = nullptr,
+                 std::size_t compute_times = 1 << 16)
+      : controller_(std::move(controller)), commands_(commands), diagnostics_(diagnostics),
+        compute_ns_(compute_times) {}
+
+  /// LCM subscription handler.
+  void on_state(const lcm::ReceiveBuffer* rbuf, const std::string&) noexcept { handle(rbuf->data, rbuf->data_size); }
+
+  /// Validates one encoded plant state and, if it is served, publishes the command.
+  void handle(const void* data, std::size_t size) noexcept {
+    const Refusal r = codec_.decode_state(data, size, state_, q_, qd_);
+    if (r != Refusal::kNone) return refuse(r == Refusal::kMalformed   ? counts_.malformed
+                                           : r == Refusal::kDimension ? counts_.wrong_dimension
+                                                                      : counts_.non_finite);
+    if (state_.run_id != run_id_ || counts_.runs == 0) {
+      run_id_ = state_.run_id;
+      last_sequence_ = -1;
+      ++counts_.runs;
+    }
+    if (state_.sequence <= last_sequence_) return refuse(counts_.stale);
+    last_sequence_ = state_.sequence;
+
+    const std::int64_t start = monotonic_ns();
+    const Status status = controller_.compute(q_, qd_, state_.t, out_);
+    const std::int64_t compute_ns = monotonic_ns() - start;
+    compute_ns_.add(static_cast<double>(compute_ns));
+    if (failed(status)) ++counts_.failed;
+
+    command_.utime = wall_us();
+    command_.sequence = ++counts_.served;
+    command_.run_id = state_.run_id;
+    command_.state_sequence = state_.sequence;
+    command_.status = static_cast<std::int32_t>(status);
+    command_.warnings = static_cast<std::int32_t>(out_.diagnostics.warnings);
+    command_.compute_ns = compute_ns;
+    const int bytes = codec_.encode_command(command_, out_.force, buffer_.data(), buffer_.size());
+    if (bytes > 0) commands_.publish(buffer_.data(), static_cast<std::size_t>(bytes), command_.utime);
+
+    if (diagnostics_) {
+      diag_.utime = command_.utime;
+      diag_.run_id = command_.run_id;
+      diag_.state_sequence = command_.state_sequence;
+      diag_.status = command_.status;
+      diag_.warnings = command_.warnings;
+      diag_.rank = out_.diagnostics.rank;
+      diag_.condition_estimate = out_.diagnostics.condition_estimate;
+      diag_.saturation_scale = out_.saturation_scale;
+      const int n = codec_.encode_diagnostics(diag_, out_.closed_loop, out_.feedforward, out_.stabilizing,
+                                              buffer_.data(), buffer_.size());
+      if (n > 0) diagnostics_->publish(buffer_.data(), static_cast<std::size_t>(n), diag_.utime);
+    }
+  }
+
+  const ControllerCounts& counts() const noexcept { return counts_; }
+  const LatencyRecorder& compute_ns() const noexcept { return compute_ns_; }
+  Controller& controller() noexcept { return controller_; }
+
+ private:
+  void refuse(long& reason) noexcept {
+    ++reason;
+    ++counts_.rejected;
+  }
+
+  Controller controller_;
+  typename Controller::Output out_;
+  Codec<N> codec_;
+  Outbox& commands_;
+  Outbox* diagnostics_;
+  plant_state_t state_{};
+  control_command_t command_{};
+  control_diagnostics_t diag_{};
+  typename Codec<N>::Vector q_, qd_;
+  std::array<std::uint8_t, kMessageBufferBytes> buffer_{};
+  std::int64_t run_id_ = 0, last_sequence_ = -1;
+  ControllerCounts counts_;
+  LatencyRecorder compute_ns_;
+};
+
+}  // namespace gausstrack::nodes

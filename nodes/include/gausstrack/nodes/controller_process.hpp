@@ -1,0 +1,122 @@
+// A whole controller process for model type M: options, configuration, LCM, the node, the loop
+// and its statistics. gausstrack-controller calls it for the compiled-in model a configuration
+// names; a user's own controller main may call it for their model in one line:
+//
+//   int main(int argc, char** argv) { return gausstrack::nodes::controller_main<MyModel>(argc, argv, "my_model"); }
+//
+// gausstrack-controller --config FILE [common options] [--diagnostics] [--stats-out FILE]
+// FILE holds a `tracking` section (a whole scene, or a file of that section alone): model,
+// parameters, trajectory, stabilization, strategy, limits. Nothing else in it is read.
+#pragma once
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "gausstrack/loop_stats_t.hpp"
+#include "gausstrack/nodes/controller_node.hpp"
+#include "gausstrack/nodes/message_log.hpp"
+#include "gausstrack/nodes/process.hpp"
+#include "gausstrack/plant_sim/models.hpp"
+#include "gausstrack/plant_sim/scene.hpp"
+
+namespace gausstrack::nodes {
+
+struct ControllerProcessOptions {
+  ProcessOptions process;
+  std::string stats_out;     ///< --stats-out FILE: the counts as JSON
+  bool diagnostics = false;  ///< --diagnostics: publish control_diagnostics_t beside each command
+};
+
+inline constexpr const char* kControllerUsage = "[--diagnostics] [--stats-out FILE]";
+
+/// Parses the controller's command line; returns 0 to go on, else the exit code (usage printed).
+inline int parse_controller_options(int argc, char** argv, ControllerProcessOptions& o) {
+  std::string error;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (parse_common_option(argc, argv, i, o.process, error)) {
+      if (!error.empty()) return std::fprintf(stderr, "error: %s\n", error.c_str()), 2;
+    } else if (a == "--stats-out" && i + 1 < argc) {
+      o.stats_out = argv[++i];
+    } else if (a == "--diagnostics") {
+      o.diagnostics = true;
+    } else {
+      std::fprintf(stderr, "usage: %s %s %s\n  (--config is --scene's other name)\n", argv[0], kCommonUsage,
+                   kControllerUsage);
+      return 2;
+    }
+  }
+  if (o.process.scene_path.empty()) return std::fprintf(stderr, "error: --config FILE is required\n"), 2;
+  return 0;
+}
+
+/// Runs the controller for model type M until SIGINT/SIGTERM; returns the exit code. Prints
+/// "gausstrack-controller: ready" once subscribed.
+template <Model M>
+int run_controller(const ControllerProcessOptions& o, const plant_sim::TrackingSpec& spec, M defaults = {}) {
+  const ProcessOptions& p = o.process;
+  lcm::LCM lcm(p.lcm_url);  // empty: LCM_DEFAULT_URL or LCM's own default
+  if (!lcm.good()) return std::fprintf(stderr, "error: cannot open LCM (%s)\n", p.lcm_url.c_str()), 1;
+  const auto log = open_message_log(p.log_path);
+  Outbox commands(lcm, p.command_channel, log.get(), p.log_wait);
+  Outbox diagnostics(lcm, p.diagnostics_channel, o.diagnostics ? log.get() : nullptr, p.log_wait);
+  Outbox stats_outbox(lcm, p.stats_channel, log.get(), true);
+  ControllerNode<M> node(plant_sim::make_controller<M>(spec, defaults), commands, o.diagnostics ? &diagnostics : nullptr);
+  lcm.subscribe(p.state_channel, &ControllerNode<M>::on_state, &node);
+  stop_on_signals();
+  apply_realtime(p, "gausstrack-controller");
+  std::printf("gausstrack-controller: ready (%s, %d coordinates, %d constraint rows)\n", spec.model.c_str(), M::kDof,
+              M::kConstraints);
+  std::fflush(stdout);
+  while (!g_stop_requested) lcm.handleTimeout(100);
+
+  const ControllerCounts& c = node.counts();
+  loop_stats_t stats{};
+  stats.utime = wall_us();
+  stats.process = "controller";
+  stats.commands_published = c.served;
+  stats.commands_failed = c.failed;
+  stats.runs = c.runs;
+  stats.messages_rejected = c.rejected;
+  stats.compute_ns_p50 = node.compute_ns().quantile(0.5);
+  stats.compute_ns_p99 = node.compute_ns().quantile(0.99);
+  stats.compute_ns_max = node.compute_ns().max();
+  stats_outbox.publish_message(stats);
+  const long log_dropped = close_message_log(log.get(), "gausstrack-controller", p.log_path);
+  if (!o.stats_out.empty()) {
+    std::ofstream out(o.stats_out);
+    out << "{\"process\": \"controller\", \"model\": \"" << spec.model << "\", \"commands_published\": " << c.served
+        << ", \"commands_failed\": " << c.failed << ", \"runs\": " << c.runs
+        << ", \"messages_rejected\": " << c.rejected << ", \"rejected_malformed\": " << c.malformed
+        << ", \"rejected_dimension\": " << c.wrong_dimension << ", \"rejected_non_finite\": " << c.non_finite
+        << ", \"rejected_stale\": " << c.stale << ", \"log_dropped\": " << log_dropped << ", "
+        << node.compute_ns().json("compute_ns") << "}\n";
+    if (!out) return std::fprintf(stderr, "error: cannot write %s\n", o.stats_out.c_str()), 1;
+  }
+  std::printf("gausstrack-controller: %ld commands published (%ld failed solves), %ld plant runs, %ld messages "
+              "rejected, compute p50 %.0f ns, p99 %.0f ns, max %.0f ns\n",
+              c.served, c.failed, c.runs, c.rejected, stats.compute_ns_p50, stats.compute_ns_p99, stats.compute_ns_max);
+  return 0;
+}
+
+/// The whole controller process for a user's model M, known to configurations as `name`.
+template <Model M>
+int controller_main(int argc, char** argv, const std::string& name, M defaults = {}) {
+  ControllerProcessOptions o;
+  if (const int code = parse_controller_options(argc, argv, o)) return code;
+  try {
+    const plant_sim::TrackingSpec spec = plant_sim::load_tracking(o.process.scene_path, o.process.sets);
+    if (spec.model != name)
+      throw plant_sim::SceneError(spec.where + ": this controller runs model '" + name + "', not '" + spec.model + "'");
+    return run_controller<M>(o, spec, defaults);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+}
+
+}  // namespace gausstrack::nodes

@@ -1,0 +1,330 @@
+// The plant process's work, for any plant: anything that advances a state over one control
+// period under a held force calls PlantNode::exchange once at the start of each period (the
+// offline simulation's sampled_control, a physics engine's loop, a user's own loop). exchange
+// publishes the state and returns the force to hold:
+// - Lock-step: waits for the command answering that state (deterministic; for tests and studies).
+// - Real time: periods start on absolute deadlines (PeriodScheduler); the plant never waits for
+//   a command. Between deadlines it services LCM, so each command is timestamped on arrival. At
+//   each period it applies the newest valid command (zero-order hold: the command answering state
+//   k is applied from period k + 1); when none has come for longer than the watchdog time it
+//   applies the safe action (zero force, or hold the last one) until commands return.
+// A command reporting a failed solve is applied as zero force and counted, never ignored in
+// favour of an older force. Commands for another run (a previous plant process) are refused.
+#pragma once
+
+#include <lcm/lcm-cpp.hpp>
+#include <poll.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <random>
+#include <span>
+#include <string>
+
+#include "gausstrack/loop_stats_t.hpp"
+#include "gausstrack/nodes/codec.hpp"
+#include "gausstrack/nodes/latency_recorder.hpp"
+#include "gausstrack/nodes/message_log.hpp"
+#include "gausstrack/nodes/process.hpp"
+#include "gausstrack/status.hpp"
+
+namespace gausstrack::nodes {
+
+/// Absolute deadlines start + k * period on CLOCK_MONOTONIC: a late wake-up does not shift the
+/// deadlines after it. Counts a wake-up later than half a period as a deadline miss.
+class PeriodScheduler {
+ public:
+  PeriodScheduler(std::int64_t period_ns, std::int64_t start_ns, std::size_t periods)
+      : period_ns_(period_ns), start_ns_(start_ns), wake_late_us_(periods) {}
+
+  /// Deadline k is start_ns + k * period from now on.
+  void restart(std::int64_t start_ns) noexcept { start_ns_ = start_ns; }
+  std::int64_t period_ns() const noexcept { return period_ns_; }
+  std::int64_t deadline(std::int64_t k) const noexcept { return start_ns_ + period_ns_ * k; }
+
+  /// Sleeps until period k's deadline (at once if it has passed), records how late the wake-up
+  /// was and returns the time of waking.
+  std::int64_t wait_for(std::int64_t k) noexcept {
+    const timespec wake = to_timespec(deadline(k));
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &wake, nullptr);
+    const std::int64_t now = monotonic_ns();
+    record_wake(k, now);
+    return now;
+  }
+  /// Records a wake-up for period k at `now` (wait_for calls it; tests call it with any time).
+  void record_wake(std::int64_t k, std::int64_t now) noexcept {
+    const std::int64_t late = now - deadline(k);
+    wake_late_us_.add(static_cast<double>(late) * 1e-3);
+    if (late > period_ns_ / 2) ++misses_;
+  }
+  long misses() const noexcept { return misses_; }
+  const LatencyRecorder& wake_late_us() const noexcept { return wake_late_us_; }
+
+ private:
+  std::int64_t period_ns_, start_ns_;
+  long misses_ = 0;
+  LatencyRecorder wake_late_us_;
+};
+
+/// Trips when no command has been applied for longer than the timeout, once per outage, and
+/// stays tripped until a command is applied again. Time is passed in: it is tested without a clock.
+class Watchdog {
+ public:
+  explicit Watchdog(std::int64_t timeout_ns, std::int64_t start_ns = 0) noexcept
+      : timeout_ns_(timeout_ns), last_fed_ns_(start_ns) {}
+
+  void feed(std::int64_t now_ns) noexcept {
+    last_fed_ns_ = now_ns;
+    tripped_ = false;
+  }
+  /// True while the safe action applies (counts a trip when it starts).
+  bool check(std::int64_t now_ns) noexcept {
+    if (!tripped_ && now_ns - last_fed_ns_ > timeout_ns_) {
+      tripped_ = true;
+      ++trips_;
+    }
+    return tripped_;
+  }
+  bool tripped() const noexcept { return tripped_; }
+  long trips() const noexcept { return trips_; }
+
+ private:
+  std::int64_t timeout_ns_, last_fed_ns_;
+  bool tripped_ = false;
+  long trips_ = 0;
+};
+
+struct PlantNodeOptions {
+  bool lockstep = false;
+  double rate_hz = 1000;       ///< control rate
+  int timeout_ms = 2000;       ///< lock-step: longest wait for a command
+  int watchdog_ms = 50;        ///< real time: safe action after this long without a command
+  bool safe_hold = false;      ///< safe action: hold the last force (else zero)
+  std::size_t periods = 1 << 16;  ///< periods to keep latency figures for
+  std::int64_t run_id = 0;     ///< 0: chosen at random
+};
+
+/// What the plant node counted.
+struct PlantCounts {
+  long states_published = 0, commands_applied = 0, commands_missing = 0, commands_late = 0;
+  long commands_failed = 0, rejected = 0, stale = 0, other_run = 0;
+};
+
+class PlantNode {
+ public:
+  using Vector = WireVector<Eigen::Dynamic>;
+
+  PlantNode(lcm::LCM& lcm, Outbox& states, const std::string& command_channel, int dimension,
+            const PlantNodeOptions& o)
+      : lcm_(lcm), states_(states), o_(o), codec_(dimension),
+        scheduler_(static_cast<std::int64_t>(std::llround(1e9 / o.rate_hz)), monotonic_ns(), o.periods),
+        watchdog_(static_cast<std::int64_t>(o.watchdog_ms) * 1000000, monotonic_ns()),
+        round_trip_us_(o.periods), compute_ns_(o.periods), answered_sequences_(o.periods) {
+    run_id_ = o.run_id != 0 ? o.run_id : random_run_id();
+    hold_ = Vector::Zero(dimension);
+    incoming_force_ = Vector::Zero(dimension);
+    latest_force_ = Vector::Zero(dimension);
+    subscription_ = lcm_.subscribe(command_channel, &PlantNode::on_command, this);
+  }
+  ~PlantNode() { lcm_.unsubscribe(subscription_); }
+  PlantNode(const PlantNode&) = delete;
+  PlantNode& operator=(const PlantNode&) = delete;
+
+  /// Called at the start of control period `period` with the state: publishes it and writes the
+  /// force to hold over the period into u. Returns false to stop the run (a stop was requested,
+  /// or in lock-step no command came within the timeout).
+  bool exchange(std::int64_t period, double t, std::span<const double> q, std::span<const double> qd,
+                std::span<double> u) noexcept {
+    if (g_stop_requested) return false;
+    const int n = codec_.dimension();
+    if (!started_) {
+      // The clock starts with the run, not with the node's construction.
+      started_ = true;
+      const std::int64_t now = monotonic_ns();
+      scheduler_.restart(now);
+      watchdog_.feed(now);
+    }
+    if (!o_.lockstep) {
+      // Until this period's deadline take commands as they come; then wake exactly at it, apply
+      // the newest command and publish the state.
+      service_until(scheduler_.deadline(period), [] { return false; });
+      const std::int64_t now = scheduler_.wait_for(period);
+      while (lcm_.handleTimeout(0) > 0) {
+      }
+      if (answered_ > last_applied_) {
+        last_applied_ = answered_;
+        watchdog_.feed(now);
+        ++counts_.commands_applied;
+        hold_ = latest_failed_ ? Vector::Zero(n) : latest_force_;
+      } else {
+        ++counts_.commands_missing;
+        if (watchdog_.check(now) && !o_.safe_hold) hold_.setZero();
+      }
+      for (int i = 0; i < n; ++i) u[static_cast<std::size_t>(i)] = hold_(i);
+      awaited_ = period;
+      exact_ = false;
+      publish_state(period, t, q, qd);
+      return true;
+    }
+    awaited_ = period;
+    exact_ = true;
+    ready_ = false;
+    publish_state(period, t, q, qd);
+    const std::int64_t give_up = monotonic_ns() + static_cast<std::int64_t>(o_.timeout_ms) * 1000000;
+    service_until(give_up, [&] { return ready_ || g_stop_requested != 0; });
+    if (g_stop_requested) return false;
+    if (!ready_) {
+      ++counts_.commands_missing;
+      std::fprintf(stderr, "error: no command answered state %lld within %d ms\n", static_cast<long long>(period),
+                   o_.timeout_ms);
+      return false;
+    }
+    ++counts_.commands_applied;
+    for (int i = 0; i < n; ++i) u[static_cast<std::size_t>(i)] = latest_failed_ ? 0.0 : latest_force_(i);
+    return true;
+  }
+
+  void on_command(const lcm::ReceiveBuffer* rbuf, const std::string&) noexcept {
+    handle_command(rbuf->data, rbuf->data_size, monotonic_ns());
+  }
+
+  /// Keeps a valid command: in lock-step the one answering the awaited state, in real time the
+  /// newest one answering a published state not yet answered; counts and drops the rest.
+  void handle_command(const void* data, std::size_t size, std::int64_t received_ns) noexcept {
+    if (codec_.decode_command(data, size, incoming_, incoming_force_) != Refusal::kNone) return reject(nullptr);
+    if (incoming_.run_id != run_id_) return reject(&counts_.other_run);
+    const std::int64_t k = incoming_.state_sequence;
+    if (k > last_published_ || k <= answered_ || (exact_ && k != awaited_) ||
+        k <= last_published_ - static_cast<std::int64_t>(published_at_.size()))
+      return reject(&counts_.stale);
+    // In real time the command for state k belongs to period k; one arriving after a newer state
+    // went out is late (it is still the newest and is applied).
+    if (k < last_published_) ++counts_.commands_late;
+    const std::int64_t sent = published_at_[static_cast<std::size_t>(k) % published_at_.size()];
+    round_trip_us_.add(static_cast<double>(received_ns - sent) * 1e-3);
+    compute_ns_.add(static_cast<double>(incoming_.compute_ns));
+    answered_sequences_.add(static_cast<double>(k));
+    latest_failed_ = incoming_.status != 0;  // any status but kOk: no answer, zero force
+    if (latest_failed_) ++counts_.commands_failed;
+    latest_force_ = incoming_force_;
+    answered_ = k;
+    ready_ = true;
+  }
+
+  std::int64_t run_id() const noexcept { return run_id_; }
+  const PlantCounts& counts() const noexcept { return counts_; }
+  const PeriodScheduler& scheduler() const noexcept { return scheduler_; }
+  const Watchdog& watchdog() const noexcept { return watchdog_; }
+  const LatencyRecorder& round_trip_us() const noexcept { return round_trip_us_; }
+  const LatencyRecorder& compute_ns() const noexcept { return compute_ns_; }
+  const LatencyRecorder& answered_sequences() const noexcept { return answered_sequences_; }
+  const PlantNodeOptions& options() const noexcept { return o_; }
+
+  /// The run's loop statistics as the plant publishes them when it stops.
+  loop_stats_t stats() const {
+    loop_stats_t s{};
+    s.utime = wall_us();
+    s.process = "plant";
+    s.states_published = counts_.states_published;
+    s.commands_applied = counts_.commands_applied;
+    s.commands_missing = counts_.commands_missing;
+    s.commands_late = counts_.commands_late;
+    s.commands_failed = counts_.commands_failed;
+    s.runs = 1;
+    s.deadline_misses = scheduler_.misses();
+    s.messages_rejected = counts_.rejected;
+    s.watchdog_trips = static_cast<std::int32_t>(watchdog_.trips());
+    s.round_trip_us_p50 = round_trip_us_.quantile(0.5);
+    s.round_trip_us_p99 = round_trip_us_.quantile(0.99);
+    s.round_trip_us_p999 = round_trip_us_.quantile(0.999);
+    s.round_trip_us_max = round_trip_us_.max();
+    s.compute_ns_p50 = compute_ns_.quantile(0.5);
+    s.compute_ns_p99 = compute_ns_.quantile(0.99);
+    s.compute_ns_max = compute_ns_.max();
+    s.wake_late_us_p99 = scheduler_.wake_late_us().quantile(0.99);
+    s.wake_late_us_max = scheduler_.wake_late_us().max();
+    return s;
+  }
+
+  /// The loop's figures as JSON object members (for the run's summary).
+  std::string summary_members(long log_dropped) const {
+    const auto n = [](long v) { return std::to_string(v); };
+    return "\"mode\": \"" + std::string(o_.lockstep ? "lockstep" : "realtime") + "\", \"control_rate_hz\": " +
+           std::to_string(o_.rate_hz) + ", \"run_id\": " + std::to_string(run_id_) +
+           ", \"states_published\": " + n(counts_.states_published) +
+           ", \"commands_applied\": " + n(counts_.commands_applied) +
+           ", \"commands_missing\": " + n(counts_.commands_missing) +
+           ", \"commands_late\": " + n(counts_.commands_late) + ", \"commands_failed\": " + n(counts_.commands_failed) +
+           ", \"deadline_misses\": " + n(scheduler_.misses()) + ", \"messages_rejected\": " + n(counts_.rejected) +
+           ", \"commands_of_other_runs\": " + n(counts_.other_run) + ", \"watchdog_trips\": " + n(watchdog_.trips()) +
+           ", \"log_dropped\": " + n(log_dropped) + ",\n  " + round_trip_us_.json("round_trip_us") + ",\n  " +
+           compute_ns_.json("compute_ns") + ",\n  " +
+           (o_.lockstep ? std::string("\"wake_late_us\": null") : scheduler_.wake_late_us().json("wake_late_us"));
+  }
+
+ private:
+  static std::int64_t random_run_id() {
+    std::random_device rd;
+    std::int64_t id = 0;
+    while (id == 0)
+      id = static_cast<std::int64_t>((static_cast<std::uint64_t>(rd()) << 32) ^ rd() ^
+                                     static_cast<std::uint64_t>(monotonic_ns())) & INT64_MAX;
+    return id;
+  }
+
+  void reject(long* reason) noexcept {
+    ++counts_.rejected;
+    if (reason) ++*reason;
+  }
+
+  void publish_state(std::int64_t period, double t, std::span<const double> q, std::span<const double> qd) noexcept {
+    const int n = codec_.dimension();
+    state_.utime = wall_us();
+    state_.sequence = period;
+    state_.run_id = run_id_;
+    state_.t = t;
+    const int size = codec_.encode_state(state_, Eigen::Map<const Eigen::VectorXd>(q.data(), n),
+                                         Eigen::Map<const Eigen::VectorXd>(qd.data(), n), buffer_.data(),
+                                         buffer_.size());
+    published_at_[static_cast<std::size_t>(period) % published_at_.size()] = monotonic_ns();
+    last_published_ = period;
+    if (size > 0) states_.publish(buffer_.data(), static_cast<std::size_t>(size), state_.utime);
+    ++counts_.states_published;
+  }
+
+  // Services LCM until `deadline_ns` (monotonic) or until done(): waits on LCM's socket and
+  // dispatches whatever arrives.
+  template <typename Done>
+  void service_until(std::int64_t deadline_ns, Done&& done) noexcept {
+    pollfd fd{lcm_.getFileno(), POLLIN, 0};
+    for (;;) {
+      const std::int64_t left = deadline_ns - monotonic_ns();
+      if (done() || left <= 0) return;
+      const timespec timeout = to_timespec(left);
+      const int ready = ppoll(&fd, 1, &timeout, nullptr);
+      if (ready > 0) lcm_.handle();
+      else if (ready == 0 || g_stop_requested) return;
+    }
+  }
+
+  lcm::LCM& lcm_;
+  Outbox& states_;
+  PlantNodeOptions o_;
+  Codec<Eigen::Dynamic> codec_;
+  PeriodScheduler scheduler_;
+  Watchdog watchdog_;
+  lcm::Subscription* subscription_ = nullptr;
+  std::int64_t run_id_ = 0;
+  plant_state_t state_{};
+  control_command_t incoming_{};
+  Vector incoming_force_, latest_force_, hold_;
+  bool latest_failed_ = false, ready_ = false, exact_ = true, started_ = false;
+  std::array<std::uint8_t, kMessageBufferBytes> buffer_{};
+  std::array<std::int64_t, 4096> published_at_{};
+  std::int64_t awaited_ = -1, answered_ = -1, last_published_ = -1, last_applied_ = -1;
+  PlantCounts counts_;
+  LatencyRecorder round_trip_us_, compute_ns_, answered_sequences_;
+};
+
+}  // namespace gausstrack::nodes
