@@ -350,11 +350,11 @@ TrackingSpec read_tracking(const Reader& t) {
 
 Scene read_scene(const Reader& root) {
   Scene s;
-  root.allow_only({"name", "plant", "tracking", "control", "integrator", "duration", "output_period", "compare"});
+  root.allow_only({"name", "plant", "tracking", "control", "integrator", "duration", "output_period"});
   s.name = root.text("name", "");
 
   const Reader plant = root.child("plant");
-  plant.allow_only({"coordinates", "masses", "model", "parameters", "initial", "effects", "constraints"});
+  plant.allow_only({"coordinates", "masses", "model", "parameters", "initial", "effects", "constraints", "projection"});
   for (const Reader& c : plant.items("coordinates")) {
     if (!c.node().IsScalar() || c.node().Scalar().empty()) c.fail("must be a coordinate name");
     const std::string n = c.node().Scalar();
@@ -408,6 +408,10 @@ Scene read_scene(const Reader& root) {
     }
   if (plant.has("constraints"))
     for (const Reader& c : plant.items("constraints")) s.constraints.push_back(read_constraint(c, s.coordinates));
+  if (plant.has("projection")) {
+    const Reader pr = plant.child("projection");
+    if (!pr.node().IsScalar() || !YAML::convert<bool>::decode(pr.node(), s.projection)) pr.fail("must be true or false");
+  }
   if (static_cast<int>(s.constraints.size()) >= n)
     plant.child("constraints").fail("needs fewer constraints than coordinates");
 
@@ -478,13 +482,6 @@ Scene read_scene(const Reader& root) {
     const double ratio = 1.0 / (s.control_rate * s.step);
     if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio)
       root.child("control").fail("the control period must be a whole number of rk4 steps");
-  }
-  if (root.has("compare")) {
-    const std::string cmp = root.text("compare");
-    if (cmp != "angle_model") root.child("compare").fail("unknown comparison '" + cmp + "' (known: angle_model)");
-    if (s.constraints.empty() || s.constraints[0].kind != ConstraintKind::kPendulumLength || s.constraints[0].mu != 0.0)
-      root.child("compare").fail("angle_model compares a constant-length pendulum (pendulum_length with mu 0)");
-    s.compare_angle_model = true;
   }
   return s;
 }

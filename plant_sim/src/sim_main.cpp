@@ -58,9 +58,6 @@ int main(int argc, char** argv) {
                 scene.name.c_str(), result.samples.size(), s.max_tracking_error, s.rms_tracking_error, s.max_constraint_residual,
                 static_cast<unsigned long long>(s.steps), static_cast<unsigned long long>(s.rhs_evaluations),
                 s.wall_time_s, out_dir.c_str());
-    if (s.compared_angle_model)
-      std::printf("  angle model: max difference %.3g m, max angle %.2f deg\n", s.max_angle_model_difference,
-                  s.max_angle_deg);
     if (s.control_failures > 0)
       std::printf("  warning: %llu control evaluations failed (zero force applied)\n",
                   static_cast<unsigned long long>(s.control_failures));

@@ -115,7 +115,8 @@ class Plant {
 
   // Constraint k's row: D_k q'' = g_k, with D_k = grad phi_k (or the Pfaffian row) and g_k the
   // rest of phi_k'' (or psi_k') moved to the right.
-  void constraint_row(const ConstraintSpec& c, const V& q, const V& qd, Eigen::RowVectorXd& D, double& g) const {
+  void constraint_row(const ConstraintSpec& c, const Eigen::Ref<const V>& q, const Eigen::Ref<const V>& qd,
+                      Eigen::RowVectorXd& D, double& g) const {
     D.setZero(n_);
     const auto& k = c.coordinates;
     if (c.kind == ConstraintKind::kPendulumLength) {
@@ -166,17 +167,63 @@ class Plant {
     return kkt_solver_.solve(b).head(n_);
   }
 
+  bool has_constraints() const { return !constraints_.empty(); }
+
+  // Projects a state x = (q, q') onto the constraint manifolds, by the least change in the
+  // metric of A (the mass-weighted projection): positions onto phi = 0 for the holonomic
+  // constraints (Gauss-Newton, at most 3 steps), then velocities onto D q' = 0 for all of them
+  // (each constraint here has phi_t = 0 and psi = D q'). Returns false if the state is not finite.
+  bool project(Eigen::VectorXd& x, RunSummary& stats) {
+    if (constraints_.empty() || !x.allFinite()) return x.allFinite();
+    ++stats.projections;
+    Eigen::Ref<V> q = x.head(n_), qd = x.tail(n_);
+    const int p = static_cast<int>(constraints_.size());
+    M D(p, n_);
+    V r(p);
+    auto rows = [&](bool holonomic_only) {
+      double g = 0;
+      for (int k = 0; k < p; ++k) {
+        const ConstraintSpec& c = constraints_[static_cast<std::size_t>(k)];
+        constraint_row(c, q, qd, row_, g);
+        const bool holonomic = c.kind == ConstraintKind::kPendulumLength;
+        D.row(k) = holonomic_only && !holonomic ? Eigen::RowVectorXd::Zero(n_) : row_;
+        r(k) = holonomic_only ? (holonomic ? position_residual(c, q) : 0.0) : row_.dot(qd);
+      }
+    };
+    // W = A^-1 at the current q.
+    M W;
+    if (model_) {
+      model_->evaluate(q, qd, 0.0, A_, f_, Q_);
+      W = A_.llt().solve(M::Identity(n_, n_));
+    } else {
+      W = mass_.cwiseInverse().asDiagonal();
+    }
+    auto correction = [&]() -> V {
+      const M DWDt = D * W * D.transpose();
+      return W * D.transpose() * DWDt.completeOrthogonalDecomposition().solve(r);
+    };
+    for (int it = 0; it < 3; ++it) {
+      rows(true);
+      if (r.cwiseAbs().maxCoeff() == 0) break;
+      q -= correction();
+    }
+    rows(false);
+    qd -= correction();
+    return x.allFinite();
+  }
+
+  static double position_residual(const ConstraintSpec& c, const Eigen::Ref<const V>& q) {
+    const auto& k = c.coordinates;
+    const double x = q(k[0]), y = q(k[1]), L = c.length;
+    return x * x + y * y - L * L * (1 - c.mu * std::sin(x * x));
+  }
+
   double constraint_residual(const V& q, const V& qd) const {
     double worst = 0;
     for (const ConstraintSpec& c : constraints_) {
       const auto& k = c.coordinates;
-      double r = 0;
-      if (c.kind == ConstraintKind::kPendulumLength) {
-        const double x = q(k[0]), y = q(k[1]), L = c.length;
-        r = x * x + y * y - L * L * (1 - c.mu * std::sin(x * x));
-      } else {
-        r = qd(k[1]) - q(k[2]) * qd(k[0]);
-      }
+      const double r = c.kind == ConstraintKind::kPendulumLength ? position_residual(c, q)
+                                                                 : qd(k[1]) - q(k[2]) * qd(k[0]);
       if (std::abs(r) > std::abs(worst)) worst = r;
     }
     return worst;
@@ -237,6 +284,7 @@ RunResult run(const Scene& s, const RunOptions& options) {
   result.samples.reserve(sample_count);
   Plant plant(s, options);
   Control control(s, options);
+  const bool project = s.projection && plant.has_constraints();
 
   const bool sampled = s.control_mode == ControlMode::kSampled;
   V held = V::Zero(N);  // the control force held over the current control period
@@ -389,6 +437,12 @@ RunResult run(const Scene& s, const RunOptions& options) {
           going = false;
           break;
         }
+        if (project && dense.current_time() < t1 * (1 - 1e-15)) {
+          // The next step starts from the projected state (dense output restarts there).
+          State xp = dense.current_state();
+          plant.project(xp, stats);
+          dense.initialize(xp, dense.current_time(), dense.current_time_step());
+        }
       }
       if (!going) break;
       dt = dense.current_time_step();
@@ -397,6 +451,7 @@ RunResult run(const Scene& s, const RunOptions& options) {
       } else {
         x = dense.current_state();
       }
+      if (project) plant.project(x, stats);
     } else if (s.method == Method::kRkf78) {
       // No dense output in odeint for this method: steps are clipped to end exactly on sample
       // and segment times (a clipped step does not shrink the step size used afterwards).
@@ -419,6 +474,7 @@ RunResult run(const Scene& s, const RunOptions& options) {
         }
         if (step_result == odeint::success) {
           ++stats.steps;
+          if (project) plant.project(x, stats);
           if (clipped) {
             t = stop;
           } else {
@@ -439,6 +495,7 @@ RunResult run(const Scene& s, const RunOptions& options) {
       for (long i = 0; i < n_steps; ++i) {
         rk4.do_step(rhs, x, t0 + static_cast<double>(i) * s.step, s.step);
         ++stats.steps;
+        if (project) plant.project(x, stats);
         if (x.allFinite()) emit_until(t0 + static_cast<double>(i + 1) * s.step, [&](double) { return x; });
         if (!step_ok(t0 + static_cast<double>(i + 1) * s.step, x, s.step)) {
           going = false;
@@ -452,34 +509,6 @@ RunResult run(const Scene& s, const RunOptions& options) {
         options.on_progress(t1);
         last_progress = now;
       }
-    }
-  }
-
-  if (s.compare_angle_model) {
-    // theta'' = -(g / L) sin(theta) with x = L sin(theta), y = L cos(theta) (y downwards).
-    double gravity = 0;
-    const auto& c = s.constraints.front().coordinates;
-    for (const EffectSpec& e : s.effects)
-      if (e.kind == EffectKind::kGravity && e.a == c[1]) gravity += e.value;
-    const double L = s.constraints.front().length;
-    using S2 = Eigen::Matrix<double, 2, 1>;
-    const double x0 = s.q0[static_cast<std::size_t>(c[0])], y0 = s.q0[static_cast<std::size_t>(c[1])];
-    const double xd0 = s.qd0[static_cast<std::size_t>(c[0])], yd0 = s.qd0[static_cast<std::size_t>(c[1])];
-    S2 th(std::atan2(x0, y0), (xd0 * y0 - yd0 * x0) / (x0 * x0 + y0 * y0));
-    auto pend = [&](const S2& z, S2& dz, double) { dz << z(1), -gravity / L * std::sin(z(0)); };
-    using D2 = odeint::runge_kutta_dopri5<S2, double, S2, double, odeint::vector_space_algebra>;
-    auto ds = odeint::make_dense_output(1e-13, 1e-13, D2());
-    ds.initialize(th, 0.0, 1e-3);
-    stats.compared_angle_model = true;
-    for (const Sample& smp : result.samples) {
-      while (ds.current_time() < smp.t) ds.do_step(pend);
-      S2 z = th;
-      if (smp.t > 0) ds.calc_state(smp.t, z);
-      const double dx = smp.q[static_cast<std::size_t>(c[0])] - L * std::sin(z(0));
-      const double dy = smp.q[static_cast<std::size_t>(c[1])] - L * std::cos(z(0));
-      stats.max_angle_model_difference = std::max(stats.max_angle_model_difference, std::hypot(dx, dy));
-      const double angle = std::atan2(smp.q[static_cast<std::size_t>(c[0])], smp.q[static_cast<std::size_t>(c[1])]);
-      stats.max_angle_deg = std::max(stats.max_angle_deg, std::abs(angle) * 180.0 / std::numbers::pi);
     }
   }
 
@@ -584,10 +613,7 @@ void write_summary_json(const Scene& scene, const RunResult& result, const std::
   num("rhs_evaluations", static_cast<double>(s.rhs_evaluations));
   num("control_evaluations", static_cast<double>(s.control_evaluations));
   num("control_failures", static_cast<double>(s.control_failures));
-  if (s.compared_angle_model) {
-    num("max_angle_model_difference", s.max_angle_model_difference);
-    num("max_angle_deg", s.max_angle_deg);
-  }
+  num("projections", static_cast<double>(s.projections));
   out << "  \"effect_evaluations\": {";
   for (std::size_t k = 0; k < s.effect_evaluations.size(); ++k)
     out << (k ? ", " : "") << "\"" << to_string(static_cast<EffectKind>(k)) << "\": " << s.effect_evaluations[k];

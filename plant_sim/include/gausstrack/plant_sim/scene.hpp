@@ -103,6 +103,9 @@ struct Scene {
   std::vector<double> q0, qd0;
   std::vector<EffectSpec> effects;
   std::vector<ConstraintSpec> constraints;
+  /// plant.projection: after each accepted step, project the state onto the position and
+  /// velocity constraint manifolds (against the drift of acceleration-level integration).
+  bool projection = false;
   TrackingSpec tracking;
   ControlMode control_mode = ControlMode::kContinuous;
   double control_rate = 0.0;  ///< [Hz], sampled mode
@@ -116,7 +119,6 @@ struct Scene {
   double max_steps = 1e8;
   double duration = 10.0;     ///< [s]
   double output_period = 0.01;  ///< [s]
-  bool compare_angle_model = false;  ///< pendulum: also integrate the angle-coordinate model
 
   int dof() const noexcept { return static_cast<int>(coordinates.size()); }
 };

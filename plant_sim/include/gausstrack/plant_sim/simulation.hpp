@@ -32,6 +32,7 @@ struct RunSummary {
   std::uint64_t rhs_evaluations = 0;  ///< evaluations of the equations of motion
   std::uint64_t control_evaluations = 0;
   std::uint64_t control_failures = 0;  ///< controller calls that returned a failure status
+  std::uint64_t projections = 0;       ///< states projected onto the constraints (plant.projection)
   double wall_time_s = 0;
   bool stopped_early = false;  ///< the external control source, or a stop request, ended the run
   /// Why the run could not go on (empty when it completed): steps collapsing below the scene's
@@ -42,10 +43,6 @@ struct RunSummary {
   double failed_at = 0;  ///< simulated time of the failure [s]
   /// Evaluations of each effect kind (indexed by EffectKind): zero for every kind not listed.
   std::array<std::uint64_t, static_cast<std::size_t>(EffectKind::kCount)> effect_evaluations{};
-  // Constant-length pendulum compared with the angle-coordinate model (compare: angle_model).
-  bool compared_angle_model = false;
-  double max_angle_model_difference = 0;  ///< max |q - q_angle| over samples [m]
-  double max_angle_deg = 0;               ///< largest |angle| from the vertical [deg]
 };
 
 struct RunResult {

@@ -1,0 +1,407 @@
+// The node library without a network (LCM's memq:// provider): the codec at every dimension,
+// the controller node's compute, validation, failure contract and plant restarts, the plant
+// node's lock-step and real-time exchange, and the scheduler and watchdog alone.
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <Eigen/Dense>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <random>
+#include <utility>
+#include <vector>
+
+#include "gausstrack/nodes/codec.hpp"
+#include "gausstrack/nodes/controller_node.hpp"
+#include "gausstrack/nodes/plant_node.hpp"
+#include "gausstrack/plant_sim/models.hpp"
+#include "gausstrack/systems/coupled_duffing.hpp"
+
+namespace gausstrack::nodes {
+namespace {
+
+using Duffing = systems::CoupledDuffing<double>;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::vector<std::uint8_t> encode_state(int dimension, std::int64_t run_id, std::int64_t sequence, double t,
+                                       const std::vector<double>& q, const std::vector<double>& qd) {
+  plant_state_t s{};
+  s.run_id = run_id;
+  s.sequence = sequence;
+  s.t = t;
+  s.dimension = dimension;
+  for (std::size_t i = 0; i < q.size(); ++i) s.q[i] = q[i], s.qd[i] = qd[i];
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(s.getEncodedSize()));
+  s.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Codec
+
+template <int N>
+void round_trip_fixed(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(-1e3, 1e3);
+  Codec<N> codec;
+  ASSERT_TRUE(codec.valid());
+  typename Codec<N>::Vector q, qd, f, q2, qd2, f2;
+  for (int i = 0; i < N; ++i) q(i) = u(rng), qd(i) = u(rng), f(i) = u(rng);
+  std::array<std::uint8_t, kMessageBufferBytes> buf{};
+  plant_state_t s{}, d{};
+  s.sequence = 9;
+  const int size = codec.encode_state(s, q, qd, buf.data(), buf.size());
+  ASSERT_GT(size, 0);
+  ASSERT_EQ(codec.decode_state(buf.data(), static_cast<std::size_t>(size), d, q2, qd2), Refusal::kNone) << N;
+  EXPECT_EQ(q2, q) << N;
+  EXPECT_EQ(qd2, qd) << N;
+  for (int i = N; i < kMaxDimension; ++i) EXPECT_EQ(d.q[i], 0.0);
+  // Another receiver's dimension, a truncated message, a NaN: each refused with its reason.
+  Codec<Eigen::Dynamic> other(N == kMaxDimension ? N - 1 : N + 1);
+  typename Codec<Eigen::Dynamic>::Vector oq, oqd;
+  EXPECT_EQ(other.decode_state(buf.data(), static_cast<std::size_t>(size), d, oq, oqd), Refusal::kDimension);
+  EXPECT_EQ(codec.decode_state(buf.data(), static_cast<std::size_t>(size - 1), d, q2, qd2), Refusal::kMalformed);
+  q(N - 1) = kNaN;
+  const int nan_size = codec.encode_state(s, q, qd, buf.data(), buf.size());
+  EXPECT_EQ(codec.decode_state(buf.data(), static_cast<std::size_t>(nan_size), d, q2, qd2), Refusal::kNonFinite);
+
+  control_command_t c{}, e{};
+  const int csize = codec.encode_command(c, f, buf.data(), buf.size());
+  ASSERT_GT(csize, 0);
+  ASSERT_EQ(codec.decode_command(buf.data(), static_cast<std::size_t>(csize), e, f2), Refusal::kNone);
+  EXPECT_EQ(f2, f);
+  EXPECT_EQ(other.decode_command(buf.data(), static_cast<std::size_t>(csize), e, oq), Refusal::kDimension);
+  // A state's bytes are not a command (the type fingerprint differs).
+  EXPECT_EQ(codec.decode_command(buf.data(), static_cast<std::size_t>(size), e, f2), Refusal::kMalformed);
+}
+
+template <int... N>
+void round_trip_all(std::integer_sequence<int, N...>, std::mt19937_64& rng) {
+  (round_trip_fixed<N + 1>(rng), ...);
+}
+
+TEST(Codec, RoundTripsAtEveryDimensionAndRefusesTheWrongOne) {
+  std::mt19937_64 rng(7);
+  round_trip_all(std::make_integer_sequence<int, kMaxDimension>{}, rng);
+}
+
+TEST(Codec, RunTimeDimensionRoundTripsAndRejectsOutOfRangeDimensions) {
+  std::mt19937_64 rng(8);
+  std::normal_distribution<double> g;
+  for (int n = 1; n <= kMaxDimension; ++n) {
+    Codec<Eigen::Dynamic> codec(n);
+    ASSERT_TRUE(codec.valid());
+    Codec<Eigen::Dynamic>::Vector q(n), qd(n), q2, qd2;
+    for (int i = 0; i < n; ++i) q(i) = g(rng), qd(i) = g(rng);
+    std::array<std::uint8_t, kMessageBufferBytes> buf{};
+    plant_state_t s{}, d{};
+    const int size = codec.encode_state(s, q, qd, buf.data(), buf.size());
+    ASSERT_EQ(codec.decode_state(buf.data(), static_cast<std::size_t>(size), d, q2, qd2), Refusal::kNone);
+    EXPECT_EQ(q2, q);
+    EXPECT_EQ(qd2, qd);
+  }
+  EXPECT_FALSE(Codec<Eigen::Dynamic>(0).valid());
+  EXPECT_FALSE(Codec<Eigen::Dynamic>(33).valid());
+  EXPECT_FALSE(Codec<3>(2).valid());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Controller node
+
+// Collects what is published on one channel of a memq LCM.
+struct Collector {
+  std::vector<control_command_t> commands;
+  void on(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    control_command_t c{};
+    ASSERT_GE(c.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)), 0);
+    commands.push_back(c);
+  }
+};
+
+plant_sim::TrackingSpec duffing_spec() {
+  plant_sim::TrackingSpec spec;
+  spec.enabled = true;
+  spec.model = "coupled_duffing";
+  spec.where = "test";
+  spec.parameters = {{"k1", 11.0, "test"}, {"alpha", 0.4, "test"}};
+  return spec;
+}
+
+// Eq. (32) for the Duffing oscillator written out by hand (not through the library's solver):
+// D = [1, -1], g = s''(t), A = diag(m1, m2), a = A^-1 (Q - f), Q' = A D^T (g - D a) / (D A^-1 D^T).
+Eigen::Vector2d duffing_force_by_hand(const Duffing& m, const Eigen::Vector2d& q, const Eigen::Vector2d& qd, double t) {
+  const Eigen::Vector2d f = m.spring_damper_force(q, qd);
+  const Eigen::Vector2d a(-f(0) / m.m1, -f(1) / m.m2);
+  const double lambda = (m.trajectory.acceleration(t) - (a(0) - a(1))) / (1 / m.m1 + 1 / m.m2);
+  return {lambda, -lambda};
+}
+
+struct ControllerFixture : ::testing::Test {
+  lcm::LCM lcm{"memq://"};
+  Outbox commands{lcm, "CMD", nullptr, false};
+  ControllerNode<Duffing> node{plant_sim::make_controller<Duffing>(duffing_spec()), commands};
+  Collector out;
+  void SetUp() override {
+    ASSERT_TRUE(lcm.good());
+    lcm.subscribe("CMD", &Collector::on, &out);
+    lcm.subscribe("STATE", &ControllerNode<Duffing>::on_state, &node);
+  }
+  // Publishes a state and dispatches until nothing is left.
+  void send(const std::vector<std::uint8_t>& bytes) {
+    lcm.publish("STATE", bytes.data(), static_cast<unsigned>(bytes.size()));
+    while (lcm.handleTimeout(0) > 0) {
+    }
+  }
+};
+
+TEST_F(ControllerFixture, AnswersEachStateWithTheLawsForce) {
+  Duffing m;
+  m.k1 = 11.0;
+  m.trajectory.alpha = 0.4;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-2, 2);
+  for (int k = 0; k < 50; ++k) {
+    const Eigen::Vector2d q(u(rng), u(rng)), qd(u(rng), u(rng));
+    const double t = 0.01 * k;
+    send(encode_state(2, 77, k, t, {q(0), q(1)}, {qd(0), qd(1)}));
+    ASSERT_EQ(out.commands.size(), static_cast<std::size_t>(k + 1));
+    const control_command_t& c = out.commands.back();
+    EXPECT_EQ(c.status, 0);
+    EXPECT_EQ(c.run_id, 77);
+    EXPECT_EQ(c.state_sequence, k);
+    EXPECT_EQ(c.dimension, 2);
+    const Eigen::Vector2d expected = duffing_force_by_hand(m, q, qd, t);
+    EXPECT_NEAR(c.force[0], expected(0), 1e-10 * (1 + expected.norm()));
+    EXPECT_NEAR(c.force[1], expected(1), 1e-10 * (1 + expected.norm()));
+  }
+  EXPECT_EQ(node.counts().served, 50);
+  EXPECT_EQ(node.counts().rejected, 0);
+}
+
+TEST_F(ControllerFixture, RefusesBadStatesWithTheirReasonAndAnswersNothing) {
+  send(encode_state(3, 1, 0, 0.0, {0, 0, 0}, {0, 0, 0}));          // dimension
+  send(encode_state(2, 1, 1, 0.0, {kNaN, 0}, {0, 0}));               // NaN
+  send(encode_state(2, 1, 2, std::numeric_limits<double>::infinity(), {0, 0}, {0, 0}));  // t
+  auto bytes = encode_state(2, 1, 3, 0.0, {0, 0}, {0, 0});
+  bytes.resize(bytes.size() / 2);                                    // truncated
+  send(bytes);
+  send(encode_state(2, 1, 4, 0.0, {0.1, 0}, {0, 0}));                // served
+  send(encode_state(2, 1, 4, 0.0, {0.1, 0}, {0, 0}));                // repeated sequence
+  send(encode_state(2, 1, 3, 0.0, {0.1, 0}, {0, 0}));                // older sequence
+  const ControllerCounts& c = node.counts();
+  EXPECT_EQ(c.wrong_dimension, 1);
+  EXPECT_EQ(c.non_finite, 2);
+  EXPECT_EQ(c.malformed, 1);
+  EXPECT_EQ(c.stale, 2);
+  EXPECT_EQ(c.rejected, 6);
+  EXPECT_EQ(c.served, 1);
+  EXPECT_EQ(out.commands.size(), 1u);
+}
+
+TEST_F(ControllerFixture, FailedSolveIsPublishedAsZeroForceWithItsStatus) {
+  // Finite but huge: the cubic springs overflow, the law cannot answer.
+  send(encode_state(2, 5, 0, 0.0, {1e120, -1e120}, {0, 0}));
+  ASSERT_EQ(out.commands.size(), 1u);
+  const control_command_t& c = out.commands[0];
+  EXPECT_NE(c.status, 0);
+  EXPECT_EQ(c.force[0], 0.0);
+  EXPECT_EQ(c.force[1], 0.0);
+  EXPECT_EQ(node.counts().failed, 1);
+  // The next good state is answered normally.
+  send(encode_state(2, 5, 1, 0.0, {0.5, 0.1}, {0, 0}));
+  ASSERT_EQ(out.commands.size(), 2u);
+  EXPECT_EQ(out.commands[1].status, 0);
+  EXPECT_NE(out.commands[1].force[0], 0.0);
+}
+
+TEST_F(ControllerFixture, RestartedPlantIsANewRunNotStaleStates) {
+  for (int k = 0; k < 5; ++k) send(encode_state(2, 100, k, 0.01 * k, {0.1, 0}, {0, 0}));
+  // The plant restarts: a new run_id, its sequence from 0 again.
+  for (int k = 0; k < 3; ++k) send(encode_state(2, 200, k, 0.01 * k, {0.1, 0}, {0, 0}));
+  EXPECT_EQ(node.counts().runs, 2);
+  EXPECT_EQ(node.counts().served, 8);
+  EXPECT_EQ(node.counts().stale, 0);
+  EXPECT_EQ(out.commands.back().run_id, 200);
+  EXPECT_EQ(out.commands.back().state_sequence, 2);
+  send(encode_state(2, 200, 1, 0.0, {0.1, 0}, {0, 0}));  // old within the new run
+  EXPECT_EQ(node.counts().stale, 1);
+}
+
+TEST_F(ControllerFixture, DiagnosticsTravelApartAndAddUpToTheForce) {
+  Outbox diag_out(lcm, "DIAG", nullptr, false);
+  ControllerNode<Duffing> with_diag(plant_sim::make_controller<Duffing>(duffing_spec()), commands, &diag_out);
+  std::vector<control_diagnostics_t> diags;
+  struct DiagCollector {
+    std::vector<control_diagnostics_t>* d;
+    void on(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      control_diagnostics_t x{};
+      ASSERT_GE(x.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)), 0);
+      d->push_back(x);
+    }
+  } dc{&diags};
+  lcm.subscribe("DIAG", &DiagCollector::on, &dc);
+  const auto bytes = encode_state(2, 9, 0, 0.3, {0.4, -0.2}, {1, 0.5});
+  with_diag.handle(bytes.data(), bytes.size());
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(diags.size(), 1u);
+  ASSERT_EQ(out.commands.size(), 1u);
+  for (int i = 0; i < 2; ++i)
+    EXPECT_NEAR(diags[0].closed_loop[i] + diags[0].feedforward[i] + diags[0].stabilizing[i], out.commands[0].force[i],
+                1e-12 * (1 + std::abs(out.commands[0].force[i])));
+  EXPECT_EQ(diags[0].state_sequence, 0);
+  EXPECT_EQ(diags[0].rank, 1);
+  // A command carries one array of 32 doubles (the force), not the parts as well.
+  EXPECT_LT(control_command_t{}.getEncodedSize(), 2 * 32 * 8);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Plant node
+
+// Answers every state on STATE with a command built by `reply` (a stand-in controller).
+struct FakeController {
+  lcm::LCM* lcm;
+  std::function<void(const plant_state_t&, control_command_t&)> reply;
+  int answered = 0;
+  void on(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    plant_state_t s{};
+    ASSERT_GE(s.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)), 0);
+    control_command_t c{};
+    c.run_id = s.run_id;
+    c.state_sequence = s.sequence;
+    c.dimension = s.dimension;
+    reply(s, c);
+    std::vector<std::uint8_t> b(static_cast<std::size_t>(c.getEncodedSize()));
+    c.encode(b.data(), 0, static_cast<int>(b.size()));
+    lcm->publish("CMD", b.data(), static_cast<unsigned>(b.size()));
+    ++answered;
+  }
+};
+
+struct PlantFixture : ::testing::Test {
+  lcm::LCM lcm{"memq://"};
+  Outbox states{lcm, "STATE", nullptr, false};
+  FakeController fake{&lcm, {}};
+  void SetUp() override {
+    ASSERT_TRUE(lcm.good());
+    lcm.subscribe("STATE", &FakeController::on, &fake);
+  }
+  static PlantNodeOptions options(bool lockstep) {
+    PlantNodeOptions o;
+    o.lockstep = lockstep;
+    o.rate_hz = 200;
+    o.timeout_ms = 200;
+    o.watchdog_ms = 20;
+    o.run_id = 4242;
+    o.periods = 64;
+    return o;
+  }
+};
+
+TEST_F(PlantFixture, LockstepAppliesTheAnswerAndZeroForAFailedSolve) {
+  PlantNode node(lcm, states, "CMD", 2, options(true));
+  fake.reply = [](const plant_state_t& s, control_command_t& c) {
+    c.force[0] = 1.0 + static_cast<double>(s.sequence);
+    c.force[1] = -2.0;
+    if (s.sequence == 1) c.status = 3;  // failed: its force must not be applied (nor an older one)
+  };
+  const std::array<double, 2> q{0.1, 0.2}, qd{0, 0};
+  std::array<double, 2> u{};
+  ASSERT_TRUE(node.exchange(0, 0.0, q, qd, u));
+  EXPECT_EQ(u[0], 1.0);
+  EXPECT_EQ(u[1], -2.0);
+  ASSERT_TRUE(node.exchange(1, 0.005, q, qd, u));
+  EXPECT_EQ(u[0], 0.0);
+  EXPECT_EQ(u[1], 0.0);
+  ASSERT_TRUE(node.exchange(2, 0.010, q, qd, u));
+  EXPECT_EQ(u[0], 3.0);
+  EXPECT_EQ(node.counts().commands_applied, 3);
+  EXPECT_EQ(node.counts().commands_failed, 1);
+}
+
+TEST_F(PlantFixture, CommandsOfAnotherRunAreRefused) {
+  PlantNode node(lcm, states, "CMD", 2, options(true));
+  fake.reply = [](const plant_state_t&, control_command_t& c) {
+    c.run_id = 1;  // a previous plant's run
+    c.force[0] = 7.0;
+  };
+  const std::array<double, 2> q{0, 0}, qd{0, 0};
+  std::array<double, 2> u{};
+  EXPECT_FALSE(node.exchange(0, 0.0, q, qd, u));  // lock-step: nothing valid within the timeout
+  EXPECT_EQ(node.counts().other_run, 1);
+  EXPECT_EQ(node.counts().commands_missing, 1);
+  EXPECT_EQ(u[0], 0.0);
+}
+
+TEST_F(PlantFixture, RealTimeHoldsTheNewestAnswerAndNeverAFailedOnesPredecessor) {
+  PlantNode node(lcm, states, "CMD", 2, options(false));
+  fake.reply = [](const plant_state_t& s, control_command_t& c) {
+    c.force[0] = 10.0 + static_cast<double>(s.sequence);
+    if (s.sequence == 2) c.status = 1;
+  };
+  const std::array<double, 2> q{0, 0}, qd{0, 0};
+  std::vector<double> applied;
+  for (int k = 0; k < 5; ++k) {
+    std::array<double, 2> u{};
+    ASSERT_TRUE(node.exchange(k, 0.005 * k, q, qd, u));
+    applied.push_back(u[0]);
+  }
+  // Period 0 has no answer yet (zero); period k applies the answer to state k - 1; state 2's
+  // answer failed, so period 3 applies zero, not state 1's force.
+  EXPECT_EQ(applied, (std::vector<double>{0.0, 10.0, 11.0, 0.0, 13.0}));
+  EXPECT_EQ(node.counts().commands_missing, 1);
+  EXPECT_EQ(node.counts().commands_failed, 1);
+  EXPECT_EQ(node.counts().states_published, 5);
+}
+
+TEST_F(PlantFixture, RealTimeWatchdogAppliesTheSafeActionThenRecovers) {
+  PlantNode node(lcm, states, "CMD", 1, options(false));
+  bool answering = true;
+  fake.reply = [&](const plant_state_t&, control_command_t& c) { c.force[0] = answering ? 5.0 : kNaN; };
+  const std::array<double, 1> q{0}, qd{0};
+  std::array<double, 1> u{};
+  int k = 0;
+  for (; k < 3; ++k) ASSERT_TRUE(node.exchange(k, 0, q, qd, u));
+  EXPECT_EQ(u[0], 5.0);
+  answering = false;  // NaN forces are refused: as if the controller were silent
+  for (; k < 3 + 10; ++k) ASSERT_TRUE(node.exchange(k, 0, q, qd, u));  // 50 ms > the 20 ms watchdog
+  EXPECT_EQ(node.watchdog().trips(), 1);
+  EXPECT_EQ(u[0], 0.0);
+  answering = true;
+  for (int j = 0; j < 3; ++j, ++k) ASSERT_TRUE(node.exchange(k, 0, q, qd, u));
+  EXPECT_EQ(u[0], 5.0);
+  EXPECT_FALSE(node.watchdog().tripped());
+  EXPECT_EQ(node.counts().commands_applied + node.counts().commands_missing, k);
+}
+
+TEST(Watchdog, TripsOncePerOutageAndClearsOnACommand) {
+  Watchdog w(20'000'000, 0);
+  EXPECT_FALSE(w.check(19'000'000));
+  EXPECT_FALSE(w.check(20'000'000));
+  EXPECT_TRUE(w.check(20'000'001));
+  EXPECT_TRUE(w.check(90'000'000));
+  EXPECT_EQ(w.trips(), 1);
+  w.feed(100'000'000);
+  EXPECT_FALSE(w.check(110'000'000));
+  EXPECT_TRUE(w.check(130'000'000));
+  EXPECT_EQ(w.trips(), 2);
+}
+
+TEST(PeriodScheduler, DeadlinesAreAbsoluteAndLateWakeUpsAreMisses) {
+  PeriodScheduler s(1'000'000, 5'000'000, 16);
+  EXPECT_EQ(s.deadline(0), 5'000'000);
+  EXPECT_EQ(s.deadline(7), 12'000'000);
+  s.record_wake(0, 5'000'100);   // on time
+  s.record_wake(1, 6'499'999);   // just under half a period late
+  s.record_wake(2, 7'500'001);   // a miss
+  s.record_wake(3, 8'000'000);   // the next deadline is not shifted by the miss
+  EXPECT_EQ(s.misses(), 1);
+  EXPECT_EQ(s.deadline(3), 8'000'000);
+  // A real wait wakes at or after its deadline.
+  PeriodScheduler real(2'000'000, monotonic_ns(), 4);
+  for (int k = 1; k <= 3; ++k) EXPECT_GE(real.wait_for(k), real.deadline(k));
+}
+
+}  // namespace
+}  // namespace gausstrack::nodes

@@ -1,0 +1,226 @@
+// Models by name, as tracking controllers and as plants, at any dimension: each shipped model
+// tracks from its scene; plants built two ways agree (point masses with effects vs the model's
+// own dynamics; a physical constraint held by the plant's KKT solve vs the same constraint
+// imposed by the control law); a user's own model runs through RunOptions::models alone.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <string>
+
+#include "gausstrack/plant_sim/models.hpp"
+#include "gausstrack/plant_sim/scene.hpp"
+#include "gausstrack/plant_sim/simulation.hpp"
+
+namespace gausstrack::plant_sim {
+namespace {
+
+const std::string kScenes = GAUSSTRACK_SCENE_DIR;
+
+double max_difference(const RunResult& a, const RunResult& b) {
+  EXPECT_EQ(a.samples.size(), b.samples.size());
+  double worst = 0;
+  for (std::size_t k = 0; k < std::min(a.samples.size(), b.samples.size()); ++k)
+    for (std::size_t i = 0; i < a.samples[k].q.size(); ++i)
+      worst = std::max({worst, std::abs(a.samples[k].q[i] - b.samples[k].q[i]),
+                        std::abs(a.samples[k].qd[i] - b.samples[k].qd[i])});
+  return worst;
+}
+
+TEST(Models, ChainOfEightTracksItsFourRelativeDisplacements) {
+  const RunResult r = run_scene(load_scene(kScenes + "/duffing_chain8.yaml"));
+  ASSERT_TRUE(r.summary.failure.empty()) << r.summary.failure;
+  EXPECT_EQ(r.samples.front().q.size(), 8u);
+  EXPECT_LT(r.summary.max_tracking_error, 1e-8);
+  EXPECT_EQ(r.summary.control_failures, 0u);
+  // Q' = D^T lambda (eq. 32 with A positive definite) and every row of D is e_j - e_(j+1): the
+  // forces sum to zero, as internal forces do.
+  for (const Sample& s : r.samples) {
+    double sum = 0, scale = 0;
+    for (double u : s.u) sum += u, scale += std::abs(u);
+    ASSERT_LE(std::abs(sum), 1e-9 * (1 + scale));
+  }
+}
+
+TEST(Models, PointMassChainEqualsTheChainModelAsItsOwnPlant) {
+  const std::string scene = kScenes + "/duffing_chain8.yaml";
+  const RunResult point_masses = run_scene(load_scene(scene));
+  const RunResult model = run_scene(
+      load_scene(scene, {"plant.masses=null", "plant.effects=[]", "plant.model=duffing_chain",
+                         "plant.parameters={m1: 2.0, m2: 1.0, k1: 10.0, k2: 12.0, kb1: 1.0, kb2: 2.0, c1: 0.1, c2: 0.15}"}));
+  ASSERT_TRUE(model.summary.failure.empty()) << model.summary.failure;
+  EXPECT_LT(max_difference(point_masses, model), 1e-8);
+}
+
+TEST(Models, ArmTracksTheCircleFromItsScene) {
+  const RunResult r = run_scene(load_scene(kScenes + "/planar_arm.yaml"));
+  ASSERT_TRUE(r.summary.failure.empty()) << r.summary.failure;
+  EXPECT_LT(r.summary.max_tracking_error, 1e-7);
+  EXPECT_EQ(r.summary.control_failures, 0u);
+}
+
+// A heavier link in the plant than in the controller's model: the law alone drifts, the per-row
+// stabilization bounds it.
+TEST(Models, ArmMismatchIsBoundedByStabilization) {
+  const std::string scene = kScenes + "/planar_arm.yaml";
+  const RunResult with = run_scene(load_scene(scene, {"plant.parameters={mass_2: 1.65}"}));
+  const RunResult without =
+      run_scene(load_scene(scene, {"plant.parameters={mass_2: 1.65}", "tracking.stabilization.omega=0"}));
+  ASSERT_TRUE(with.summary.failure.empty() && without.summary.failure.empty());
+  EXPECT_GT(without.summary.max_tracking_error, 1e-3);
+  EXPECT_LT(with.summary.max_tracking_error, 1e-2);
+  EXPECT_LT(with.summary.max_tracking_error, 0.2 * without.summary.max_tracking_error);
+}
+
+// Two formulations of the same motion: the rod held by the plant (a Lagrange-multiplier solve
+// written in plant_sim) and the rod imposed by the control law on a free bob (eq. 32).
+TEST(Models, PendulumHeldByThePlantEqualsPendulumHeldByTheLaw) {
+  const RunResult physical = run_scene(load_scene(kScenes + "/pendulum_fig1.yaml"));
+  const RunResult controlled = run_scene(load_scene(kScenes + "/pendulum_controlled.yaml"));
+  ASSERT_TRUE(controlled.summary.failure.empty()) << controlled.summary.failure;
+  EXPECT_LT(controlled.summary.max_tracking_error, 1e-6 * 400);  // phi in m^2, L^2 = 400
+  EXPECT_LT(max_difference(physical, controlled), 1e-5);
+}
+
+TEST(Models, NonholonomicParticleHeldByThePlantEqualsParticleHeldByTheLaw) {
+  const RunResult physical = run_scene(load_scene(kScenes + "/rosenberg.yaml"));
+  const RunResult controlled = run_scene(load_scene(kScenes + "/particle_controlled.yaml"));
+  ASSERT_TRUE(controlled.summary.failure.empty()) << controlled.summary.failure;
+  EXPECT_LT(controlled.summary.max_tracking_error, 1e-8);
+  EXPECT_LT(max_difference(physical, controlled), 1e-7);
+}
+
+TEST(Models, SeveralPhysicalConstraintsAreHeldTogether) {
+  // Two pendulum bobs (x1, y1), (x2, y2) on rods of 20 m and 10 m, with a spring between them.
+  const std::string text = R"(
+name: two_bobs
+plant:
+  coordinates: [x1, y1, x2, y2]
+  masses: [1.0, 1.0, 2.0, 2.0]
+  initial: {q1: 0.0, q2: 20.0, q3: 0.0, q4: 10.0, qd1: 2.0, qd3: -1.0}
+  effects:
+    - {type: gravity, coordinate: y1, acceleration: 9.81}
+    - {type: gravity, coordinate: y2, acceleration: 9.81}
+    - {type: spring, between: [x1, x2], stiffness: 3.0}
+  constraints:
+    - {type: pendulum_length, x: x1, y: y1, length: 20.0}
+    - {type: pendulum_length, x: x2, y: y2, length: 10.0}
+integrator: {method: dopri5, tolerance: 1.0e-11}
+duration: 5.0
+output_period: 0.01
+)";
+  const RunResult r = run_scene(parse_scene(text, "two_bobs"));
+  ASSERT_TRUE(r.summary.failure.empty()) << r.summary.failure;
+  EXPECT_LT(r.summary.max_constraint_residual, 1e-5);
+  double worst = 0;
+  for (const Sample& s : r.samples) {
+    worst = std::max(worst, std::abs(s.q[0] * s.q[0] + s.q[1] * s.q[1] - 400));
+    worst = std::max(worst, std::abs(s.q[2] * s.q[2] + s.q[3] * s.q[3] - 100));
+  }
+  EXPECT_LT(worst, 1e-5);
+  EXPECT_GT(std::abs(r.samples.back().q[2]), 0.1);  // the spring moved the second bob
+}
+
+// Acceleration-level integration drifts off a physical constraint (Fig. 2: 3.3e-6 of L^2);
+// projecting each accepted step onto the position and velocity manifolds removes the drift,
+// and the motion still agrees with the run without projection to its integration accuracy.
+TEST(Models, ProjectionRemovesConstraintDrift) {
+  for (const char* scene : {"pendulum_fig2", "rosenberg"}) {
+    const RunResult drift = run_scene(load_scene(kScenes + "/" + scene + ".yaml"));
+    const RunResult projected = run_scene(load_scene(kScenes + "/" + scene + ".yaml", {"plant.projection=true"}));
+    ASSERT_TRUE(projected.summary.failure.empty()) << projected.summary.failure;
+    EXPECT_EQ(drift.summary.projections, 0u);
+    EXPECT_GE(projected.summary.projections, projected.summary.steps);
+    EXPECT_LT(projected.summary.max_constraint_residual, 1e-9) << scene;
+    EXPECT_LT(projected.summary.max_constraint_residual, 1e-3 * drift.summary.max_constraint_residual) << scene;
+    EXPECT_LT(max_difference(drift, projected), 1e-4) << scene;
+  }
+}
+
+// A user's own model: one mass tracking x = sin(t) from the constraint written as phi(q, t).
+struct SineTracker {
+  using Scalar = double;
+  static constexpr int kDof = 1, kConstraints = 1, kHolonomicRows = 1;
+  double mass = 2.0;
+  void evaluate(const Eigen::Matrix<double, 1, 1>&, const Eigen::Matrix<double, 1, 1>&, double,
+                ModelTerms<1, 1, double>& terms) const noexcept {
+    terms.mass_matrix(0, 0) = mass;
+  }
+  template <typename T>
+  Eigen::Matrix<T, 1, 1> phi(const Eigen::Matrix<T, 1, 1>& q, const T& t) const {
+    using std::sin;
+    return Eigen::Matrix<T, 1, 1>(q(0) - sin(t));
+  }
+  template <typename F>
+  void parameters(F&& f) {
+    f("mass", mass);
+  }
+};
+
+const char* kUserScene = R"(
+name: user
+plant:
+  coordinates: [x]
+  model: sine_tracker
+  parameters: {mass: 3.0}
+  initial: {q1: 0.0, qd1: 1.0}
+tracking:
+  model: sine_tracker
+  parameters: {mass: 3.0}
+integrator: {method: dopri5, tolerance: 1.0e-11}
+duration: 3.0
+output_period: 0.01
+)";
+
+TEST(Models, AUsersOwnModelRunsThroughRunOptionsAlone) {
+  RunOptions o;
+  o.models.push_back(model_factory<SineTracker>("sine_tracker"));
+  const RunResult r = run_scene(parse_scene(kUserScene, "user"), o);
+  ASSERT_TRUE(r.summary.failure.empty()) << r.summary.failure;
+  EXPECT_LT(r.summary.max_tracking_error, 1e-8);
+  // Closed form: x = sin t needs u = m x'' = -3 sin t.
+  for (const Sample& s : r.samples) ASSERT_NEAR(s.u[0], -3.0 * std::sin(s.t), 1e-6);
+  try {
+    run_scene(parse_scene(kUserScene, "user"));
+    FAIL() << "an unknown model ran";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown model 'sine_tracker'"), std::string::npos) << e.what();
+  }
+  try {
+    run_scene(parse_scene(kUserScene, "user", {"tracking.parameters.masss=1"}), o);
+    FAIL() << "an unknown parameter was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("has no parameter 'masss' (known: mass)"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Models, ScenesNamingModelsAreCheckedWithFileLineAndKey) {
+  const std::string arm = kScenes + "/planar_arm.yaml";
+  auto error_of = [](const std::string& path, const std::vector<std::string>& sets) -> std::string {
+    try {
+      load_scene(path, sets);
+    } catch (const SceneError& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  EXPECT_NE(error_of(arm, {"plant.parameters={mass_7: 1}"}).find("has no parameter 'mass_7'"), std::string::npos);
+  EXPECT_NE(error_of(arm, {"plant.coordinates=[a, b]"}).find("model 'planar_arm' has 3 coordinates"),
+            std::string::npos);
+  EXPECT_NE(error_of(arm, {"plant.effects=[{type: gravity, coordinate: q1, acceleration: 9.8}]"})
+                .find("a plant model's gravity is its own"),
+            std::string::npos);
+  EXPECT_NE(error_of(arm, {"plant.masses=[1, 1, 1]"}).find("either point masses or a model"), std::string::npos);
+  EXPECT_NE(error_of(arm, {"tracking.model=coupled_duffing"}).find("has 2 coordinates, the plant has 3"),
+            std::string::npos);
+  // The controller's own configuration: the tracking section alone, whatever else the file holds.
+  const TrackingSpec spec = load_tracking(arm, {"tracking.strategy=svd"});
+  EXPECT_EQ(spec.model, "planar_arm");
+  EXPECT_EQ(spec.strategy, "svd");
+  EXPECT_EQ(spec.stabilization_omega, 20.0);
+  const TrackingSpec alone = parse_tracking("tracking: {model: pendulum, parameters: {mu: -0.1}}", "own.yaml");
+  EXPECT_EQ(alone.parameter("mu", 0), -0.1);
+}
+
+}  // namespace
+}  // namespace gausstrack::plant_sim
