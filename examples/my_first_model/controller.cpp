@@ -1,5 +1,7 @@
 // The controller process for TetheredPuck: subscribe to plant states, answer each with the law's
-// force. Reads the `tracking` section of the scene (or of a file of its own).
+// force. Reads the `tracking` section of the scene (or of a file of its own). Written out to show
+// the node; nodes::controller_main<TetheredPuck>(argc, argv, "tethered_puck") is the same process
+// with message logs, diagnostics and statistics in one line.
 //   my_model_controller --config tethered_puck.yaml [--lcm-url URL]
 #include <lcm/lcm-cpp.hpp>
 
@@ -19,12 +21,14 @@ int main(int argc, char** argv) {
       return std::fprintf(stderr, "usage: %s %s\n", argv[0], nodes::kCommonUsage), 2;
   try {
     const plant_sim::TrackingSpec spec = plant_sim::load_tracking(o.scene_path, o.sets);
+    if (spec.model != "tethered_puck") return std::fprintf(stderr, "error: %s names another model\n", spec.where.c_str()), 1;
     lcm::LCM lcm(o.lcm_url);
     if (!lcm.good()) return std::fprintf(stderr, "error: cannot open LCM\n"), 1;
     nodes::Outbox commands(lcm, o.command_channel, nullptr, false);
     nodes::ControllerNode<TetheredPuck> node(plant_sim::make_controller<TetheredPuck>(spec), commands);
     lcm.subscribe(o.state_channel, &nodes::ControllerNode<TetheredPuck>::on_state, &node);
     nodes::stop_on_signals();
+    nodes::apply_realtime(o, "my_model_controller");  // --rt-priority, --cpu, --lock-memory
     std::printf("my_model_controller: ready\n");
     std::fflush(stdout);
     while (!nodes::g_stop_requested) lcm.handleTimeout(100);

@@ -3,6 +3,7 @@
 // full reach. Each strategy of the law is run over the same passage (plant = the arm model,
 // offline) and the program prints what the diagnostics said and what force was commanded.
 //   planar_arm_stretched [OUT_DIR]
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -14,6 +15,7 @@ int main(int argc, char** argv) {
   using namespace gausstrack;
   using Arm = systems::PlanarArm<double>;
   const std::string scene_path = std::string(GAUSSTRACK_EXAMPLE_DIR) + "/stretched.yaml";
+  bool ok = true;
   std::printf("| strategy | floor [min sigma] | max tracking error | max |force| [N m] | rank-deficient | "
               "near-singular | saturated |\n|---|---|---|---|---|---|---|\n");
   for (const char* strategy : {"cholesky", "svd", "cod", "damped"})
@@ -35,9 +37,11 @@ int main(int argc, char** argv) {
         saturated += out.diagnostics.has(warning::kSaturated);
         max_force = std::max(max_force, out.force.cwiseAbs().maxCoeff());
       }
+      // Whatever the strategy, no command beyond the actuator limit and nothing non-finite.
+      ok = ok && std::isfinite(max_force) && max_force <= scene.tracking.force_limit * (1 + 1e-12);
       std::printf("| %s | %s | %.3g | %.3g | %ld | %ld | %ld |%s\n", strategy, floor, r.summary.max_tracking_error,
                   max_force, rank_deficient, near_singular, saturated,
                   r.summary.failure.empty() ? "" : (" failed: " + r.summary.failure).c_str());
     }
-  return 0;
+  return ok ? 0 : 1;
 }

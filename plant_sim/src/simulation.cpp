@@ -29,7 +29,7 @@ using V = Eigen::VectorXd;
 using M = Eigen::MatrixXd;
 
 // The model of that name: one the run was given (RunOptions::models), else a compiled-in one.
-const ModelFactory& find_model(const Scene& s, const RunOptions& o, const std::string& name, const std::string& where) {
+const ModelFactory& find_model(const RunOptions& o, const std::string& name, const std::string& where) {
   for (const ModelFactory& f : o.models)
     if (f.name == name) return f;
   if (const ModelFactory* f = find_builtin_model(name)) return *f;
@@ -49,7 +49,7 @@ class Plant {
  public:
   Plant(const Scene& s, const RunOptions& o) : n_(s.dof()) {
     if (!s.plant_model.empty()) {
-      model_ = find_model(s, o, s.plant_model, s.plant_model_where).plant(s.plant_parameters);
+      model_ = find_model(o, s.plant_model, s.plant_model_where).plant(s.plant_parameters);
       if (model_->dof() != n_)
         throw SceneError(s.plant_model_where + ": model '" + s.plant_model + "' has " +
                          std::to_string(model_->dof()) + " coordinates, the plant lists " + std::to_string(n_));
@@ -173,7 +173,7 @@ class Plant {
   // metric of A (the mass-weighted projection): positions onto phi = 0 for the holonomic
   // constraints (Gauss-Newton, at most 3 steps), then velocities onto D q' = 0 for all of them
   // (each constraint here has phi_t = 0 and psi = D q'). Returns false if the state is not finite.
-  bool project(Eigen::VectorXd& x, RunSummary& stats) {
+  bool project(Eigen::VectorXd& x, double t, RunSummary& stats) {
     if (constraints_.empty() || !x.allFinite()) return x.allFinite();
     ++stats.projections;
     Eigen::Ref<V> q = x.head(n_), qd = x.tail(n_);
@@ -193,8 +193,13 @@ class Plant {
     // W = A^-1 at the current q.
     M W;
     if (model_) {
-      model_->evaluate(q, qd, 0.0, A_, f_, Q_);
-      W = A_.llt().solve(M::Identity(n_, n_));
+      model_->evaluate(q, qd, t, A_, f_, Q_);
+      llt_.compute(A_);
+      if (llt_.info() != Eigen::Success) {
+        x.setConstant(std::numeric_limits<double>::quiet_NaN());  // the run stops with its reason
+        return false;
+      }
+      W = llt_.solve(M::Identity(n_, n_));
     } else {
       W = mass_.cwiseInverse().asDiagonal();
     }
@@ -251,7 +256,7 @@ struct Control {
 
   Control(const Scene& s, const RunOptions& o) {
     if (!s.tracking.enabled) return;
-    law = find_model(s, o, s.tracking.model, s.tracking.where).control_law(s.tracking);
+    law = find_model(o, s.tracking.model, s.tracking.where).control_law(s.tracking);
     if (law->dof() != s.dof())
       throw SceneError(s.tracking.where + ": model '" + s.tracking.model + "' has " + std::to_string(law->dof()) +
                        " coordinates, the plant has " + std::to_string(s.dof()));
@@ -430,6 +435,7 @@ RunResult run(const Scene& s, const RunOptions& options) {
           emit_until(reached, [&](double ts) {
             State xs(2 * N);
             dense.calc_state(ts, xs);
+            if (project) plant.project(xs, ts, stats);  // the plant's state is the projected one
             return xs;
           });
         }
@@ -440,7 +446,7 @@ RunResult run(const Scene& s, const RunOptions& options) {
         if (project && dense.current_time() < t1 * (1 - 1e-15)) {
           // The next step starts from the projected state (dense output restarts there).
           State xp = dense.current_state();
-          plant.project(xp, stats);
+          plant.project(xp, dense.current_time(), stats);
           dense.initialize(xp, dense.current_time(), dense.current_time_step());
         }
       }
@@ -451,7 +457,7 @@ RunResult run(const Scene& s, const RunOptions& options) {
       } else {
         x = dense.current_state();
       }
-      if (project) plant.project(x, stats);
+      if (project) plant.project(x, t1, stats);
     } else if (s.method == Method::kRkf78) {
       // No dense output in odeint for this method: steps are clipped to end exactly on sample
       // and segment times (a clipped step does not shrink the step size used afterwards).
@@ -474,12 +480,12 @@ RunResult run(const Scene& s, const RunOptions& options) {
         }
         if (step_result == odeint::success) {
           ++stats.steps;
-          if (project) plant.project(x, stats);
           if (clipped) {
             t = stop;
           } else {
             dt = h;
           }
+          if (project) plant.project(x, t, stats);
         } else {
           dt = h;
         }
@@ -495,7 +501,7 @@ RunResult run(const Scene& s, const RunOptions& options) {
       for (long i = 0; i < n_steps; ++i) {
         rk4.do_step(rhs, x, t0 + static_cast<double>(i) * s.step, s.step);
         ++stats.steps;
-        if (project) plant.project(x, stats);
+        if (project) plant.project(x, t0 + static_cast<double>(i + 1) * s.step, stats);
         if (x.allFinite()) emit_until(t0 + static_cast<double>(i + 1) * s.step, [&](double) { return x; });
         if (!step_ok(t0 + static_cast<double>(i + 1) * s.step, x, s.step)) {
           going = false;

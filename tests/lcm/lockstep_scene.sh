@@ -15,6 +15,7 @@ paste -d, "$work/lockstep/trajectory.csv" "$work/offline/trajectory.csv" | awk -
   NR == 1 { n = NF / 2; for (i = 1; i <= n; ++i) if ($i != $(i + n)) { print "header differs"; exit 1 }; next }
   {
     for (i = 1; i <= n; ++i) {
+      if ($i ~ /nan|inf/ || $(i + n) ~ /nan|inf/) { print "non-finite value in row " NR; exit 1 }
       a = $i; b = $(i + n); d = a - b; if (d < 0) d = -d; s = b < 0 ? -b : b
       r = d / (1 + s); if (r > worst) worst = r
     }

@@ -32,7 +32,7 @@ TEST(Messages, PlantStateRoundTripsThroughAFixedBuffer) {
   const int size = s.getEncodedSize();
   ASSERT_LE(size, static_cast<int>(buf.size()));
   // Fixed-size arrays: the encoded size does not depend on the content.
-  EXPECT_EQ(size, 8 + 8 + 8 + 8 + 4 + 2 * 32 * 8);
+  EXPECT_EQ(size, 8 + 8 + 8 + 8 + 8 + 4 + 2 * 32 * 8);  // fingerprint, utime, sequence, run_id, t
   ASSERT_EQ(s.encode(buf.data(), 0, size), size);
   gausstrack::plant_state_t d{};
   ASSERT_EQ(d.decode(buf.data(), 0, size), size);

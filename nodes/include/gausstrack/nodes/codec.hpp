@@ -65,12 +65,17 @@ class Codec {
     return Refusal::kNone;
   }
 
-  /// Decodes a command into `msg` and its force. A failed solve's command is accepted (its force
-  /// is zero and its status says why); a non-finite force is refused.
+  /// Decodes a command into `msg` and its force. A failed solve's command (status not 0) is
+  /// accepted with a zero force whatever its force entries say; otherwise a non-finite force is
+  /// refused.
   Refusal decode_command(const void* data, std::size_t size, control_command_t& msg, Vector& force) const noexcept {
     if (size > static_cast<std::size_t>(INT32_MAX) || msg.decode(data, 0, static_cast<int>(size)) < 0)
       return Refusal::kMalformed;
     if (msg.dimension != n_) return Refusal::kDimension;
+    if (msg.status != 0) {
+      force = Vector::Zero(n_);
+      return Refusal::kNone;
+    }
     force = Eigen::Map<const Vector>(msg.force, n_);
     if (!force.allFinite()) return Refusal::kNonFinite;
     return Refusal::kNone;

@@ -10,7 +10,10 @@
 //
 // Wire contract:
 // - A state that does not decode, has another dimension or a non-finite value is counted and
-//   dropped; so is one of the current plant run whose sequence is not newer than the last.
+//   dropped; so is one of the current plant run whose sequence is older than the last, and one
+//   of a run that has ended (a late datagram of a plant that restarted).
+// - The last state repeated (a plant in lock-step asking again after a lost message) is
+//   answered again with the same command, not recomputed.
 // - A state with a new run_id is a new plant run (a restarted plant): its sequence starts again
 //   and it is served.
 // - Every served state gets one command: the force, or all zeros with the status of a failed
@@ -22,8 +25,10 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <array>
+#include <climits>
 #include <cstdint>
 #include <string>
+#include <utility>
 
 #include "gausstrack/model.hpp"
 #include "gausstrack/nodes/codec.hpp"
@@ -37,6 +42,7 @@ namespace gausstrack::nodes {
 /// What the controller node counted.
 struct ControllerCounts {
   long served = 0;      ///< states answered with a command
+  long repeated = 0;    ///< repeated states answered again with the same command
   long failed = 0;      ///< commands reporting a failed solve (force zero)
   long rejected = 0;    ///< states refused (any reason below)
   long malformed = 0, wrong_dimension = 0, non_finite = 0, stale = 0;
@@ -54,7 +60,9 @@ class ControllerNode {
   ControllerNode(Controller controller, Outbox& commands, Outbox* diagnostics = nullptr,
                  std::size_t compute_times = 1 << 16)
       : controller_(std::move(controller)), commands_(commands), diagnostics_(diagnostics),
-        compute_ns_(compute_times) {}
+        compute_ns_(compute_times) {
+    ended_runs_.fill(INT64_MIN);
+  }
 
   /// LCM subscription handler.
   void on_state(const lcm::ReceiveBuffer* rbuf, const std::string&) noexcept { handle(rbuf->data, rbuf->data_size); }
@@ -65,12 +73,21 @@ class ControllerNode {
     if (r != Refusal::kNone) return refuse(r == Refusal::kMalformed   ? counts_.malformed
                                            : r == Refusal::kDimension ? counts_.wrong_dimension
                                                                       : counts_.non_finite);
+    if (state_.sequence < 0) return refuse(counts_.stale);
     if (state_.run_id != run_id_ || counts_.runs == 0) {
+      for (std::int64_t ended : ended_runs_)
+        if (ended == state_.run_id) return refuse(counts_.stale);
+      if (counts_.runs > 0) ended_runs_[static_cast<std::size_t>(counts_.runs) % ended_runs_.size()] = run_id_;
       run_id_ = state_.run_id;
       last_sequence_ = -1;
       ++counts_.runs;
     }
-    if (state_.sequence <= last_sequence_) return refuse(counts_.stale);
+    if (state_.sequence == last_sequence_ && last_bytes_ > 0) {
+      ++counts_.repeated;
+      commands_.publish(last_command_.data(), static_cast<std::size_t>(last_bytes_), wall_us());
+      return;
+    }
+    if (state_.sequence < last_sequence_) return refuse(counts_.stale);
     last_sequence_ = state_.sequence;
 
     const std::int64_t start = monotonic_ns();
@@ -86,8 +103,8 @@ class ControllerNode {
     command_.status = static_cast<std::int32_t>(status);
     command_.warnings = static_cast<std::int32_t>(out_.diagnostics.warnings);
     command_.compute_ns = compute_ns;
-    const int bytes = codec_.encode_command(command_, out_.force, buffer_.data(), buffer_.size());
-    if (bytes > 0) commands_.publish(buffer_.data(), static_cast<std::size_t>(bytes), command_.utime);
+    last_bytes_ = codec_.encode_command(command_, out_.force, last_command_.data(), last_command_.size());
+    if (last_bytes_ > 0) commands_.publish(last_command_.data(), static_cast<std::size_t>(last_bytes_), command_.utime);
 
     if (diagnostics_) {
       diag_.utime = command_.utime;
@@ -123,7 +140,9 @@ class ControllerNode {
   control_command_t command_{};
   control_diagnostics_t diag_{};
   typename Codec<N>::Vector q_, qd_;
-  std::array<std::uint8_t, kMessageBufferBytes> buffer_{};
+  std::array<std::uint8_t, kMessageBufferBytes> buffer_{}, last_command_{};
+  int last_bytes_ = 0;
+  std::array<std::int64_t, 8> ended_runs_{};  ///< the last runs that ended (INT64_MIN: none)
   std::int64_t run_id_ = 0, last_sequence_ = -1;
   ControllerCounts counts_;
   LatencyRecorder compute_ns_;

@@ -2,9 +2,12 @@
 // period under a held force calls PlantNode::exchange once at the start of each period (the
 // offline simulation's sampled_control, a physics engine's loop, a user's own loop). exchange
 // publishes the state and returns the force to hold:
-// - Lock-step: waits for the command answering that state (deterministic; for tests and studies).
+// - Lock-step: waits for the command answering that state (deterministic; for tests and studies),
+//   publishing the state again every 100 ms meanwhile, so that one lost datagram costs a resend,
+//   not the run.
 // - Real time: periods start on absolute deadlines (PeriodScheduler); the plant never waits for
-//   a command. Between deadlines it services LCM, so each command is timestamped on arrival. At
+//   a command. Between deadlines it services LCM; round trips are measured from the state's
+//   publication to the kernel's receive timestamp of the command (LCM's recv_utime). At
 //   each period it applies the newest valid command (zero-order hold: the command answering state
 //   k is applied from period k + 1); when none has come for longer than the watchdog time it
 //   applies the safe action (zero force, or hold the last one) until commands return.
@@ -17,6 +20,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
 #include <cstdint>
 #include <random>
 #include <span>
@@ -108,7 +114,9 @@ struct PlantNodeOptions {
 /// What the plant node counted.
 struct PlantCounts {
   long states_published = 0, commands_applied = 0, commands_missing = 0, commands_late = 0;
-  long commands_failed = 0, rejected = 0, stale = 0, other_run = 0;
+  long commands_failed = 0, states_resent = 0;
+  long rejected = 0;  ///< commands refused, for one of these reasons:
+  long malformed = 0, wrong_dimension = 0, non_finite = 0, stale = 0, other_run = 0;
 };
 
 class PlantNode {
@@ -117,7 +125,7 @@ class PlantNode {
 
   PlantNode(lcm::LCM& lcm, Outbox& states, const std::string& command_channel, int dimension,
             const PlantNodeOptions& o)
-      : lcm_(lcm), states_(states), o_(o), codec_(dimension),
+      : lcm_(lcm), states_(states), o_(o), codec_(checked(dimension)),
         scheduler_(static_cast<std::int64_t>(std::llround(1e9 / o.rate_hz)), monotonic_ns(), o.periods),
         watchdog_(static_cast<std::int64_t>(o.watchdog_ms) * 1000000, monotonic_ns()),
         round_trip_us_(o.periods), compute_ns_(o.periods), answered_sequences_(o.periods) {
@@ -136,8 +144,9 @@ class PlantNode {
   /// or in lock-step no command came within the timeout).
   bool exchange(std::int64_t period, double t, std::span<const double> q, std::span<const double> qd,
                 std::span<double> u) noexcept {
-    if (g_stop_requested) return false;
     const int n = codec_.dimension();
+    const auto sn = static_cast<std::size_t>(n);
+    if (g_stop_requested || q.size() != sn || qd.size() != sn || u.size() != sn) return false;
     if (!started_) {
       // The clock starts with the run, not with the node's construction.
       started_ = true;
@@ -172,12 +181,21 @@ class PlantNode {
     ready_ = false;
     publish_state(period, t, q, qd);
     const std::int64_t give_up = monotonic_ns() + static_cast<std::int64_t>(o_.timeout_ms) * 1000000;
-    service_until(give_up, [&] { return ready_ || g_stop_requested != 0; });
+    for (;;) {
+      const std::int64_t resend = std::min(give_up, monotonic_ns() + kResendNs);
+      service_until(resend, [&] { return ready_ || g_stop_requested != 0; });
+      if (ready_ || g_stop_requested || monotonic_ns() >= give_up) break;
+      ++counts_.states_resent;
+      send_state();
+    }
     if (g_stop_requested) return false;
     if (!ready_) {
       ++counts_.commands_missing;
-      std::fprintf(stderr, "error: no command answered state %lld within %d ms\n", static_cast<long long>(period),
-                   o_.timeout_ms);
+      std::fprintf(stderr,
+                   "error: no command answered state %lld within %d ms (commands refused meanwhile: %ld malformed, "
+                   "%ld of another dimension, %ld non-finite, %ld stale, %ld of another run)\n",
+                   static_cast<long long>(period), o_.timeout_ms, counts_.malformed, counts_.wrong_dimension,
+                   counts_.non_finite, counts_.stale, counts_.other_run);
       return false;
     }
     ++counts_.commands_applied;
@@ -186,13 +204,20 @@ class PlantNode {
   }
 
   void on_command(const lcm::ReceiveBuffer* rbuf, const std::string&) noexcept {
-    handle_command(rbuf->data, rbuf->data_size, monotonic_ns());
+    // The kernel's receive time where LCM has it, else now (both on the wall clock of this host).
+    handle_command(rbuf->data, rbuf->data_size, rbuf->recv_utime > 0 ? rbuf->recv_utime * 1000 : wall_us() * 1000);
   }
 
   /// Keeps a valid command: in lock-step the one answering the awaited state, in real time the
   /// newest one answering a published state not yet answered; counts and drops the rest.
+  /// `received_ns`: when it arrived, on the wall clock [ns since the Unix epoch].
   void handle_command(const void* data, std::size_t size, std::int64_t received_ns) noexcept {
-    if (codec_.decode_command(data, size, incoming_, incoming_force_) != Refusal::kNone) return reject(nullptr);
+    switch (codec_.decode_command(data, size, incoming_, incoming_force_)) {
+      case Refusal::kNone: break;
+      case Refusal::kMalformed: return reject(&counts_.malformed);
+      case Refusal::kDimension: return reject(&counts_.wrong_dimension);
+      case Refusal::kNonFinite: return reject(&counts_.non_finite);
+    }
     if (incoming_.run_id != run_id_) return reject(&counts_.other_run);
     const std::int64_t k = incoming_.state_sequence;
     if (k > last_published_ || k <= answered_ || (exact_ && k != awaited_) ||
@@ -257,7 +282,7 @@ class PlantNode {
            ", \"commands_missing\": " + n(counts_.commands_missing) +
            ", \"commands_late\": " + n(counts_.commands_late) + ", \"commands_failed\": " + n(counts_.commands_failed) +
            ", \"deadline_misses\": " + n(scheduler_.misses()) + ", \"messages_rejected\": " + n(counts_.rejected) +
-           ", \"commands_of_other_runs\": " + n(counts_.other_run) + ", \"watchdog_trips\": " + n(watchdog_.trips()) +
+           ", \"commands_of_other_runs\": " + n(counts_.other_run) + ", \"states_resent\": " + n(counts_.states_resent) + ", \"watchdog_trips\": " + n(watchdog_.trips()) +
            ", \"log_dropped\": " + n(log_dropped) + ",\n  " + round_trip_us_.json("round_trip_us") + ",\n  " +
            compute_ns_.json("compute_ns") + ",\n  " +
            (o_.lockstep ? std::string("\"wake_late_us\": null") : scheduler_.wake_late_us().json("wake_late_us"));
@@ -273,24 +298,37 @@ class PlantNode {
     return id;
   }
 
+  static constexpr std::int64_t kResendNs = 100'000'000;
+
+  static int checked(int dimension) {
+    if (dimension < 1 || dimension > kMaxDimension)
+      throw std::invalid_argument("PlantNode: dimension " + std::to_string(dimension) + " is not in 1..32");
+    return dimension;
+  }
+
   void reject(long* reason) noexcept {
     ++counts_.rejected;
-    if (reason) ++*reason;
+    ++*reason;
   }
 
   void publish_state(std::int64_t period, double t, std::span<const double> q, std::span<const double> qd) noexcept {
     const int n = codec_.dimension();
-    state_.utime = wall_us();
     state_.sequence = period;
     state_.run_id = run_id_;
     state_.t = t;
-    const int size = codec_.encode_state(state_, Eigen::Map<const Eigen::VectorXd>(q.data(), n),
-                                         Eigen::Map<const Eigen::VectorXd>(qd.data(), n), buffer_.data(),
-                                         buffer_.size());
-    published_at_[static_cast<std::size_t>(period) % published_at_.size()] = monotonic_ns();
+    state_bytes_ = codec_.encode_state(state_, Eigen::Map<const Eigen::VectorXd>(q.data(), n),
+                                       Eigen::Map<const Eigen::VectorXd>(qd.data(), n), buffer_.data(),
+                                       buffer_.size());
     last_published_ = period;
-    if (size > 0) states_.publish(buffer_.data(), static_cast<std::size_t>(size), state_.utime);
+    send_state();
     ++counts_.states_published;
+  }
+
+  // (Re)sends the encoded state; its round trip counts from the last sending.
+  void send_state() noexcept {
+    const std::int64_t now_us = wall_us();
+    published_at_[static_cast<std::size_t>(last_published_) % published_at_.size()] = now_us * 1000;
+    if (state_bytes_ > 0) states_.publish(buffer_.data(), static_cast<std::size_t>(state_bytes_), now_us);
   }
 
   // Services LCM until `deadline_ns` (monotonic) or until done(): waits on LCM's socket and
@@ -321,7 +359,8 @@ class PlantNode {
   Vector incoming_force_, latest_force_, hold_;
   bool latest_failed_ = false, ready_ = false, exact_ = true, started_ = false;
   std::array<std::uint8_t, kMessageBufferBytes> buffer_{};
-  std::array<std::int64_t, 4096> published_at_{};
+  int state_bytes_ = 0;
+  std::array<std::int64_t, 4096> published_at_{};  ///< wall clock [ns] each state was sent
   std::int64_t awaited_ = -1, answered_ = -1, last_published_ = -1, last_applied_ = -1;
   PlantCounts counts_;
   LatencyRecorder round_trip_us_, compute_ns_, answered_sequences_;
