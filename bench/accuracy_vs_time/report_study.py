@@ -174,6 +174,18 @@ def main(d):
                 "stabilization omega [rad/s]", "rms tracking error")
     out += ["", "![stabilization](stabilization.png)", ""]
 
+    # Projection onto the constraint manifolds.
+    pj = rows(d, "projection.csv")
+    out += ["## Constraint drift: projection after each step (Fig. 2, Fig. 3's a; dopri5)", "",
+            "Error against Fehlberg 7(8) at tolerance 1e-13 with projection (another method), largest "
+            "|q - q_ref| over the samples.", ""]
+    out.append(table(["a", "tolerance", "projection", "rhs evaluations", "wall [s]", "max residual [m^2]",
+                      "max error [m]", "final error [m]"],
+                     [[r["a"], r["tolerance"], "yes" if r["projection"] == "1" else "no", r["rhs_evaluations"],
+                       fmt(r["wall_s"]), fmt(r["max_constraint_residual"]), fmt(r["max_error"]),
+                       fmt(r["final_error"])] for r in pj]))
+    out.append("")
+
     with open(os.path.join(d, "README.md"), "w") as f:
         f.write("\n".join(out) + "\n")
     print(os.path.join(d, "README.md"))
