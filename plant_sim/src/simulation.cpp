@@ -250,16 +250,20 @@ class Plant {
   Eigen::CompleteOrthogonalDecomposition<M> kkt_solver_;
 };
 
-// The scene's tracking controller (none without a tracking section).
+// The scene's tracking controller (none without a tracking section), or, when the forces come
+// from elsewhere (a controller process), only the tracking error of the scene's model.
 struct Control {
   std::unique_ptr<ControlLaw> law;
+  std::function<double(const double*, const double*, double)> error;
 
   Control(const Scene& s, const RunOptions& o) {
     if (!s.tracking.enabled) return;
-    law = find_model(o, s.tracking.model, s.tracking.where).control_law(s.tracking);
-    if (law->dof() != s.dof())
-      throw SceneError(s.tracking.where + ": model '" + s.tracking.model + "' has " + std::to_string(law->dof()) +
+    const ModelFactory& model = find_model(o, s.tracking.model, s.tracking.where);
+    if (model.dof != s.dof())
+      throw SceneError(s.tracking.where + ": model '" + s.tracking.model + "' has " + std::to_string(model.dof) +
                        " coordinates, the plant has " + std::to_string(s.dof()));
+    if (o.sampled_control) error = model.tracking_error(s.tracking);
+    else law = model.control_law(s.tracking);
   }
 
   V force(const V& q, const V& qd, double t, RunSummary& stats) {
@@ -272,6 +276,7 @@ struct Control {
   }
 
   double tracking_error(const V& q, const V& qd, double t) const {
+    if (error) return error(q.data(), qd.data(), t);
     return law ? law->tracking_error(q.data(), qd.data(), t) : 0.0;
   }
 };

@@ -162,6 +162,9 @@ struct ModelFactory {
   std::vector<std::string> parameter_names;
   std::function<std::unique_ptr<ControlLaw>(const TrackingSpec&)> control_law;
   std::function<std::unique_ptr<PlantModel>(const std::vector<ModelParameter>&)> plant;
+  /// The tracking error alone (the model's phi and psi with the spec's parameters): what a plant
+  /// whose forces come from elsewhere (a controller process) records, without a controller.
+  std::function<std::function<double(const double* q, const double* qd, double t)>(const TrackingSpec&)> tracking_error;
 };
 
 /// The factory for model type M under `name`, starting from the parameters of `defaults`.
@@ -179,6 +182,14 @@ ModelFactory model_factory(std::string name, M defaults = {}) {
     M m = defaults;
     apply_parameters(m, parameters, name);
     return std::make_unique<ModelPlant<M>>(m);
+  };
+  f.tracking_error = [defaults](const TrackingSpec& spec) {
+    M m = defaults;
+    apply_parameters(m, spec.parameters, spec.model);
+    return [m](const double* q, const double* qd, double t) {
+      using V = Eigen::Matrix<double, M::kDof, 1>;
+      return plant_sim::tracking_error(m, V(Eigen::Map<const V>(q)), V(Eigen::Map<const V>(qd)), t);
+    };
   };
   return f;
 }
