@@ -90,7 +90,7 @@ int run_controller(const ControllerProcessOptions& o, const plant_sim::TrackingS
   if (!o.stats_out.empty()) {
     std::ofstream out(o.stats_out);
     out << "{\"process\": \"controller\", \"model\": \"" << spec.model << "\", \"commands_published\": " << c.served
-        << ", \"commands_failed\": " << c.failed << ", \"runs\": " << c.runs
+        << ", \"commands_failed\": " << c.failed << ", \"commands_repeated\": " << c.repeated << ", \"runs\": " << c.runs
         << ", \"messages_rejected\": " << c.rejected << ", \"rejected_malformed\": " << c.malformed
         << ", \"rejected_dimension\": " << c.wrong_dimension << ", \"rejected_non_finite\": " << c.non_finite
         << ", \"rejected_stale\": " << c.stale << ", \"log_dropped\": " << log_dropped << ", "
