@@ -25,6 +25,10 @@ function(gausstrack_enable_sanitizers target)
                                              -fno-omit-frame-pointer)
     target_link_options(${target} PRIVATE -fsanitize=address,undefined -fno-sanitize-recover=undefined)
   endif()
+  if(GAUSSTRACK_BUILD_FUZZ)
+    # Coverage for libFuzzer in every library a fuzz target links; the targets add the driver.
+    target_compile_options(${target} PRIVATE -fsanitize=fuzzer-no-link)
+  endif()
 endfunction()
 
 # A program of ours: warnings and sanitizers attached in one place.

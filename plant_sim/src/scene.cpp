@@ -65,6 +65,12 @@ class Reader {
 
   std::string key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
 
+  /// The text of a mapping key of this node; a key that is a list or a mapping is an error.
+  std::string key(const YAML::Node& k) const {
+    if (!k.IsScalar()) fail_at(k, path_, "a key must be a plain name, not a list or a mapping");
+    return k.Scalar();
+  }
+
   void require_map() const {
     if (!node_.IsMap()) fail("must be a mapping of keys to values");
   }
@@ -73,7 +79,7 @@ class Reader {
   void allow_only(std::initializer_list<const char*> keys) const {
     require_map();
     for (const auto& kv : node_) {
-      const std::string k = kv.first.as<std::string>();
+      const std::string k = key(kv.first);
       if (std::none_of(keys.begin(), keys.end(), [&](const char* a) { return k == a; })) {
         std::string allowed;
         for (const char* a : keys) allowed += std::string(allowed.empty() ? "" : ", ") + a;
@@ -295,7 +301,7 @@ std::vector<ModelParameter> read_parameters(const Reader& r) {
   r.require_map();
   std::vector<ModelParameter> out;
   for (const auto& kv : r.node()) {
-    const std::string k = kv.first.as<std::string>();
+    const std::string k = r.key(kv.first);
     const Reader v = r.child(k.c_str());
     out.push_back({k, v.as_number(), v.where()});
   }
@@ -306,8 +312,9 @@ std::vector<ModelParameter> read_parameters(const Reader& r) {
 void check_parameter_names(const Reader& parent, const char* key, const ModelFactory& f) {
   if (!parent.has(key)) return;
   const Reader r = parent.child(key);
+  r.require_map();
   for (const auto& kv : r.node()) {
-    const std::string k = kv.first.as<std::string>();
+    const std::string k = r.key(kv.first);
     if (std::find(f.parameter_names.begin(), f.parameter_names.end(), k) == f.parameter_names.end()) {
       std::string known;
       for (const auto& p : f.parameter_names) known += (known.empty() ? "" : ", ") + p;
@@ -391,7 +398,7 @@ Scene read_scene(const Reader& root) {
   const Reader initial = plant.child("initial");
   initial.require_map();
   for (const auto& kv : initial.node()) {
-    const std::string k = kv.first.as<std::string>();
+    const std::string k = initial.key(kv.first);
     bool ok = false;
     for (int i = 1; i <= n; ++i) ok = ok || k == "q" + std::to_string(i) || k == "qd" + std::to_string(i);
     if (!ok) initial.fail_at(kv.first, initial.key_path(k), "unknown key (expected q1..q" + std::to_string(n) + ", qd1..qd" + std::to_string(n) + ")");
@@ -514,8 +521,21 @@ std::string read_file(const std::string& path, const char* what) {
 
 }  // namespace
 
+// Any yaml-cpp error the readers did not turn into a message of their own (a conversion of a
+// node of an unexpected kind) still ends as a SceneError naming the file and the line.
+namespace {
+template <typename F>
+auto reading(const std::string& name, F&& read) {
+  try {
+    return read();
+  } catch (const YAML::Exception& e) {
+    throw SceneError(name + ":" + std::to_string(e.mark.line + 1) + ": cannot be read: " + e.msg);
+  }
+}
+}  // namespace
+
 Scene parse_scene(const std::string& yaml_text, const std::string& name, const std::vector<std::string>& overrides) {
-  Scene s = read_scene(parse_root(yaml_text, name, overrides));
+  Scene s = reading(name, [&] { return read_scene(parse_root(yaml_text, name, overrides)); });
   s.file = name;
   return s;
 }
@@ -526,8 +546,7 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 
 TrackingSpec parse_tracking(const std::string& yaml_text, const std::string& name,
                             const std::vector<std::string>& overrides) {
-  const Reader root = parse_root(yaml_text, name, overrides);
-  return read_tracking(root.child("tracking"));
+  return reading(name, [&] { return read_tracking(parse_root(yaml_text, name, overrides).child("tracking")); });
 }
 
 TrackingSpec load_tracking(const std::string& path, const std::vector<std::string>& overrides) {

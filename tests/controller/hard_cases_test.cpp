@@ -346,6 +346,32 @@ TEST(HardCases, ExtremeMagnitudesNeverProduceNonFiniteOutput) {
   }
 }
 
+// Found by fuzz_solver: entries near the range limit whose solve is finite but whose residual
+// D q'' - g overflows to NaN. The answer cannot be verified, so it must say so (constraints not
+// met, residual infinite) instead of a NaN residual that no tolerance test catches.
+TEST(HardCases, UnverifiableResidualIsReported) {
+  // The finding's numbers, each matrix column by column.
+  const double a[] = {0x0.64d0006000000p-1022, 0x0.100ff00000000p-1022, 0x1.effffffffffffp-1008,
+                      0x1.d4d4d4d000001p+213,  0x1.d4d4d4d4d4d4dp+213,  0x1.d4d4d4d4d4d4dp+213,
+                      0x1.d4d4d4d4d4d4dp+213,  0x1.d4d4d4d4d4d4dp+213,  0x1.d4d4d4d4d4d4dp+213};
+  const double d[] = {0x1.d4d4d00000100p+213, 0x1.d4d4d4d4d4d4dp+213, 0x1.a2a2a2a2a2a2ap-349,
+                      0x1.a2a2a2a2a2a2ap-1021, 0x0.0000200550000p-1022, 0x1.d4d4d2a2a2a00p+213};
+  const Eigen::Matrix3d A = Eigen::Map<const Eigen::Matrix3d>(a);
+  const Eigen::Matrix<double, 2, 3> D = Eigen::Map<const Eigen::Matrix<double, 2, 3>>(d);
+  const Eigen::Vector3d f(0x1.a2a2a2a2a4d4dp-349, 0x1.a2a2a2a2a2a2ap-349, 0x1.a2a2a342a2a2ap-349);
+  const Eigen::Vector3d Q(0x1.a2a0100feff2ap-349, 0x1.a2a2a2a2a2a2ap-349, -0x1.f2a2a2a2a2a34p+1008);
+  const Eigen::Vector2d g(0x0.04d4d4d4d4d4dp-1022, 0x1.d00000080fe00p+213);
+  auto solver = solver_for<3, 2>(InverseStrategy::kCompleteOrthogonal, -1, 0x0.00000004d0033p-1022);
+  ConstraintSolution<3, 2> sol;
+  const Status st = solver.solve(A, f, Q, D, g, sol);
+  expect_all_finite(sol);
+  // The case is what it was: a finite answer whose residual overflows.
+  ASSERT_FALSE(failed(st)) << to_string(st);
+  ASSERT_FALSE(std::isfinite((D * sol.acceleration - g).norm()));
+  EXPECT_TRUE(sol.diagnostics.has(warning::kConstraintsNotMet));
+  EXPECT_EQ(sol.diagnostics.residual_norm, std::numeric_limits<double>::infinity());
+}
+
 // float instantiation: the same answers as double within float precision.
 TEST(HardCases, FloatMatchesDouble) {
   RandomSource<double> rng(11);

@@ -7,7 +7,7 @@
 #include <map>
 #include <string>
 
-#include "gausstrack/loop_stats_t.hpp"
+#include "gausstrack/nodes/codec.hpp"
 
 int main(int argc, char** argv) {
   if (argc != 2) return std::fprintf(stderr, "usage: %s FILE\n", argv[0]), 2;
@@ -18,7 +18,7 @@ int main(int argc, char** argv) {
     ++counts[e->channel];
     gausstrack::loop_stats_t stats;
     if (e->channel.size() > 6 && e->channel.compare(e->channel.size() - 6, 6, "_STATS") == 0 &&
-        stats.decode(e->data, 0, e->datalen) == e->datalen)
+        gausstrack::nodes::decode_loop_stats(e->data, static_cast<std::size_t>(e->datalen), stats))
       std::printf("stats %s states_published=%lld commands_applied=%lld commands_published=%lld "
                   "messages_rejected=%lld\n",
                   stats.process.c_str(), static_cast<long long>(stats.states_published),

@@ -87,6 +87,31 @@ TEST(Codec, RoundTripsAtEveryDimensionAndRefusesTheWrongOne) {
   round_trip_all(std::make_integer_sequence<int, kMaxDimension>{}, rng);
 }
 
+// Found by fuzz_messages: the generated decoder of loop_stats_t throws std::length_error on a
+// string length of 0 (and reads before the buffer on a negative one); decode_loop_stats refuses
+// those and every truncation, and decodes a real message whole.
+TEST(Codec, LoopStatsDecoderRefusesBadStringLengths) {
+  loop_stats_t s{};
+  s.process = "controller";
+  s.commands_published = 1234;
+  std::vector<std::uint8_t> buf(static_cast<std::size_t>(s.getEncodedSize()));
+  ASSERT_EQ(s.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+  loop_stats_t d{};
+  ASSERT_TRUE(decode_loop_stats(buf.data(), buf.size(), d));
+  EXPECT_EQ(d.process, "controller");
+  EXPECT_EQ(d.commands_published, 1234);
+  for (std::size_t n = 0; n < buf.size(); ++n) EXPECT_FALSE(decode_loop_stats(buf.data(), n, d)) << n;
+  // The string's length field: bytes 16..19, big-endian, 11 here ("controller" and its '\0').
+  ASSERT_EQ(buf[19], 11);
+  for (const std::int32_t bad : {0, -1, -100, INT32_MIN, 1 << 20}) {
+    std::vector<std::uint8_t> b = buf;
+    const auto u = static_cast<std::uint32_t>(bad);
+    b[16] = static_cast<std::uint8_t>(u >> 24), b[17] = static_cast<std::uint8_t>(u >> 16);
+    b[18] = static_cast<std::uint8_t>(u >> 8), b[19] = static_cast<std::uint8_t>(u);
+    EXPECT_FALSE(decode_loop_stats(b.data(), b.size(), d)) << bad;
+  }
+}
+
 TEST(Codec, RunTimeDimensionRoundTripsAndRejectsOutOfRangeDimensions) {
   std::mt19937_64 rng(8);
   std::normal_distribution<double> g;

@@ -36,6 +36,8 @@ const BadScene kBadScenes[] = {
     {"malformed_yaml.yaml", ":8", "not valid YAML"},
     {"sampled_without_rate.yaml", ":11: control", "missing required key 'rate'"},
     {"noise_without_sampling.yaml", ":7: plant.effects[0]", "sensor_noise needs control.mode: sampled"},
+    // Found by fuzz_scene: a list written where a key goes escaped as a yaml-cpp conversion error.
+    {"list_as_key.yaml", ":7: plant.effects[0]", "a key must be a plain name"},
 };
 
 TEST(Scene, BadScenesFailWithFileLineAndKey) {

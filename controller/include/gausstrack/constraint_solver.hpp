@@ -211,7 +211,11 @@ class ConstraintSolver {
 
     diag.residual_norm = (D * out.acceleration - g).norm();
     const Scalar scale = g.norm() + D.norm() * out.acceleration.norm();
-    if (diag.residual_norm > options_.residual_tolerance * scale) {
+    if (!std::isfinite(diag.residual_norm)) {
+      // D q'' overflowed (entries near the range limit): the answer cannot be verified.
+      diag.residual_norm = std::numeric_limits<Scalar>::infinity();
+      diag.warnings |= warning::kConstraintsNotMet;
+    } else if (diag.residual_norm > options_.residual_tolerance * scale) {
       diag.warnings |= warning::kConstraintsNotMet;
     }
     if (diag.rank < P) diag.warnings |= warning::kRankDeficient;

@@ -12,6 +12,7 @@
 
 #include "gausstrack/control_command_t.hpp"
 #include "gausstrack/control_diagnostics_t.hpp"
+#include "gausstrack/loop_stats_t.hpp"
 #include "gausstrack/plant_state_t.hpp"
 
 namespace gausstrack::nodes {
@@ -125,6 +126,22 @@ class Codec {
 
   int n_;
 };
+
+/// Decodes loop statistics, refusing what the generated decoder would mishandle: LCM 1.3.1's C++
+/// decoder trusts a string's length field, and a length below 1 makes it throw std::length_error
+/// (or read before the buffer). Returns false for anything that is not a whole loop_stats_t.
+inline bool decode_loop_stats(const void* data, std::size_t size, loop_stats_t& msg) noexcept {
+  // Layout: fingerprint (8 bytes), utime (8), the process string's length counting its '\0'
+  // (int32, big-endian), its bytes, then the fixed-size fields.
+  constexpr std::size_t kLengthAt = 16;
+  if (size > static_cast<std::size_t>(INT32_MAX) || size < kLengthAt + 4) return false;
+  const auto* b = static_cast<const std::uint8_t*>(data) + kLengthAt;
+  const auto length = static_cast<std::int32_t>(static_cast<std::uint32_t>(b[0]) << 24 |
+                                                static_cast<std::uint32_t>(b[1]) << 16 |
+                                                static_cast<std::uint32_t>(b[2]) << 8 | b[3]);
+  if (length < 1 || static_cast<std::size_t>(length) > size - kLengthAt - 4) return false;
+  return msg.decode(data, 0, static_cast<int>(size)) == static_cast<int>(size);
+}
 
 /// Encoded sizes of the messages are fixed (their arrays are): a buffer of this size holds any.
 inline constexpr std::size_t kMessageBufferBytes = 4096;

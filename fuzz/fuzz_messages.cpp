@@ -1,0 +1,170 @@
+// Every message decoder and validator on hostile bytes: the generated decoders of the three
+// fixed-size message types, the checked decoder of loop statistics (decode_loop_stats), the
+// codec's state and command validation at any dimension, the controller node's handling of a
+// state (serve, repeat or refuse) and the plant node's handling of a command.
+//
+// Properties (any violation aborts, so libFuzzer keeps the input):
+// - a decoded state or command that the codec accepts has finite values and its dimension;
+// - the controller node accounts for every datagram (served + repeated + rejected), and every
+//   command it publishes decodes, answers that run with a finite force, and is zero when failed;
+// - the plant node accounts for every command (kept or refused, never applied twice).
+#include <lcm/lcm-cpp.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "fuzz_input.hpp"
+#include "gausstrack/control_command_t.hpp"
+#include "gausstrack/control_diagnostics_t.hpp"
+#include "gausstrack/loop_stats_t.hpp"
+#include "gausstrack/nodes/codec.hpp"
+#include "gausstrack/nodes/controller_node.hpp"
+#include "gausstrack/nodes/message_log.hpp"
+#include "gausstrack/nodes/plant_node.hpp"
+#include "gausstrack/plant_state_t.hpp"
+#include "gausstrack/systems/coupled_duffing.hpp"
+
+namespace {
+
+namespace gn = gausstrack::nodes;
+using gausstrack::fuzz::FuzzInput;
+using Duffing = gausstrack::systems::CoupledDuffing<double>;
+
+constexpr std::int64_t kPlantRunId = 42;  // the seed corpus's commands answer this run
+
+// One in-process LCM (no network) shared by every input; its queue is drained after each input.
+struct Harness {
+  lcm::LCM lcm{"memq://"};
+  gn::Outbox commands{lcm, "COMMAND", nullptr, false};
+  gn::Outbox states{lcm, "STATE", nullptr, false};
+  long commands_seen = 0;
+  gn::Codec<2> codec;
+
+  Harness() { lcm.subscribe("COMMAND", &Harness::on_command, this); }
+
+  // A command the controller node published: it must be well formed.
+  void on_command(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    ++commands_seen;
+    gausstrack::control_command_t msg;
+    gn::WireVector<2> force;
+    GAUSSTRACK_FUZZ_CHECK(codec.decode_command(rbuf->data, rbuf->data_size, msg, force) == gn::Refusal::kNone);
+    GAUSSTRACK_FUZZ_CHECK(force.allFinite());
+    for (int i = 0; i < gn::kMaxDimension; ++i) GAUSSTRACK_FUZZ_CHECK(std::isfinite(msg.force[i]));
+    if (msg.status != 0) GAUSSTRACK_FUZZ_CHECK(force.isZero(0));
+  }
+  void drain() {
+    while (lcm.handleTimeout(0) > 0) {
+    }
+  }
+};
+
+Harness& harness() {
+  static Harness h;
+  return h;
+}
+
+template <typename Message>
+void decode_generated(const std::uint8_t* data, std::size_t size) {
+  Message m;
+  const int n = m.decode(data, 0, static_cast<int>(size));
+  GAUSSTRACK_FUZZ_CHECK(n <= static_cast<int>(size));
+  if (n >= 0) {
+    // What decoded encodes again to the same size.
+    GAUSSTRACK_FUZZ_CHECK(m.getEncodedSize() == n);
+  }
+}
+
+void codec_case(std::uint8_t dimension, const std::uint8_t* data, std::size_t size) {
+  gn::Codec<Eigen::Dynamic> codec(dimension % 40);
+  if (!codec.valid()) return;
+  gausstrack::plant_state_t state;
+  gn::WireVector<Eigen::Dynamic> q, qd, force;
+  if (codec.decode_state(data, size, state, q, qd) == gn::Refusal::kNone) {
+    GAUSSTRACK_FUZZ_CHECK(state.dimension == codec.dimension() && q.size() == codec.dimension());
+    GAUSSTRACK_FUZZ_CHECK(q.allFinite() && qd.allFinite() && std::isfinite(state.t));
+  }
+  gausstrack::control_command_t command;
+  if (codec.decode_command(data, size, command, force) == gn::Refusal::kNone) {
+    GAUSSTRACK_FUZZ_CHECK(command.dimension == codec.dimension() && force.size() == codec.dimension());
+    GAUSSTRACK_FUZZ_CHECK(force.allFinite());
+  }
+}
+
+// The length of the next datagram: two bytes (little endian), at most what is left.
+std::size_t next_length(FuzzInput& in) {
+  std::size_t n = in.byte();
+  n |= static_cast<std::size_t>(in.byte()) << 8;
+  return n < in.rest_size() ? n : in.rest_size();
+}
+
+// A sequence of datagrams for one controller node: each is its length and that many bytes.
+void controller_case(FuzzInput& in) {
+  Harness& h = harness();
+  gn::ControllerNode<Duffing> node(gausstrack::TrackingController<Duffing>{}, h.commands, nullptr, 16);
+  const long before = h.commands_seen;
+  long datagrams = 0;
+  while (in.rest_size() > 0) {
+    std::size_t n = next_length(in);
+    const std::uint8_t* bytes = in.rest();
+    for (std::size_t i = 0; i < n; ++i) in.byte();
+    node.handle(bytes, n);
+    ++datagrams;
+  }
+  h.drain();
+  const gn::ControllerCounts& c = node.counts();
+  GAUSSTRACK_FUZZ_CHECK(c.served + c.repeated + c.rejected == datagrams);
+  GAUSSTRACK_FUZZ_CHECK(c.rejected == c.malformed + c.wrong_dimension + c.non_finite + c.stale);
+  GAUSSTRACK_FUZZ_CHECK(h.commands_seen - before == c.served + c.repeated);
+}
+
+void plant_case(FuzzInput& in) {
+  Harness& h = harness();
+  gn::PlantNodeOptions o;
+  o.run_id = kPlantRunId;
+  o.periods = 16;
+  gn::PlantNode node(h.lcm, h.states, "PLANT_COMMAND", 1 + in.byte() % 32, o);
+  long datagrams = 0;
+  while (in.rest_size() > 0) {
+    std::size_t n = next_length(in);
+    const std::uint8_t* bytes = in.rest();
+    for (std::size_t i = 0; i < n; ++i) in.byte();
+    node.handle_command(bytes, n, 0);
+    ++datagrams;
+  }
+  h.drain();
+  const gn::PlantCounts& c = node.counts();
+  // No state was published, so no command can be kept: each one is refused for a stated reason.
+  GAUSSTRACK_FUZZ_CHECK(c.rejected == datagrams);
+  GAUSSTRACK_FUZZ_CHECK(c.rejected == c.malformed + c.wrong_dimension + c.non_finite + c.stale + c.other_run);
+  GAUSSTRACK_FUZZ_CHECK(c.commands_applied == 0);
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  FuzzInput in(data, size);
+  const std::uint8_t selector = in.byte();
+  const std::uint8_t* rest = in.rest();
+  const std::size_t rest_size = in.rest_size();
+  switch (selector % 8) {
+    case 0: decode_generated<gausstrack::plant_state_t>(rest, rest_size); break;
+    case 1: decode_generated<gausstrack::control_command_t>(rest, rest_size); break;
+    case 2: decode_generated<gausstrack::control_diagnostics_t>(rest, rest_size); break;
+    case 3: {
+      gausstrack::loop_stats_t stats;
+      if (gn::decode_loop_stats(rest, rest_size, stats)) GAUSSTRACK_FUZZ_CHECK(stats.getEncodedSize() == static_cast<int>(rest_size));
+      break;
+    }
+    case 4: {
+      const std::uint8_t dimension = in.byte();
+      codec_case(dimension, in.rest(), in.rest_size());
+      break;
+    }
+    case 5:
+    case 6: controller_case(in); break;
+    default: plant_case(in); break;
+  }
+  return 0;
+}

@@ -1,0 +1,125 @@
+// The law's inputs as raw bytes: A, f, Q, D, g of the solver at 2x1, 3x2 and 4x2 under each
+// strategy and fuzzed options, and the Duffing tracking controller at a fuzzed state with fuzzed
+// gains and actuator limits.
+//
+// Properties (any violation aborts, so libFuzzer keeps the input):
+// - an input holding NaN or Inf gets Status::kNonFiniteInput and all-zero outputs;
+// - finite input gives finite outputs, whatever the status; a failed status gives all zeros;
+// - a successful solve reports a rank in [0, P] and a condition estimate that is not NaN;
+// - the controller's published force and its parts are finite, and within the force limit set.
+#include <Eigen/Core>
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "fuzz_input.hpp"
+#include "gausstrack/constraint_solver.hpp"
+#include "gausstrack/systems/coupled_duffing.hpp"
+#include "gausstrack/tracking_controller.hpp"
+
+namespace {
+
+using gausstrack::fuzz::FuzzInput;
+
+template <typename Derived>
+void fill(FuzzInput& in, bool raw, Eigen::MatrixBase<Derived>& m) {
+  for (Eigen::Index j = 0; j < m.cols(); ++j)
+    for (Eigen::Index i = 0; i < m.rows(); ++i) m(i, j) = in.number(raw);
+}
+
+template <int N, int P>
+void solve_case(FuzzInput& in) {
+  using Solver = gausstrack::ConstraintSolver<N, P>;
+  const std::uint8_t mode = in.byte();
+  const bool raw = (mode & 1) != 0;
+  typename Solver::Options options;
+  options.strategy = static_cast<gausstrack::InverseStrategy>((mode >> 1) % 4);
+  if (mode & 8) options.rank_tolerance = in.number(raw);
+  if (mode & 16) options.min_singular_value = in.number(raw);
+  if (mode & 32) options.damping = in.number(raw);
+  if (mode & 64) options.fallback_rcond = in.number(raw);
+
+  typename Solver::MatrixNN A;
+  typename Solver::VectorN f, Q;
+  typename Solver::MatrixPN D;
+  typename Solver::VectorP g;
+  fill(in, raw, A);
+  if (mode & 128) A = (A * A.transpose()).eval();  // often positive definite, sometimes singular
+  fill(in, raw, f);
+  fill(in, raw, Q);
+  fill(in, raw, D);
+  fill(in, raw, g);
+
+  Solver solver(options);
+  typename Solver::Solution out;
+  const gausstrack::Status status = solver.solve(A, f, Q, D, g, out);
+  GAUSSTRACK_FUZZ_CHECK(status == out.diagnostics.status);
+
+  const bool finite_input = A.allFinite() && f.allFinite() && Q.allFinite() && D.allFinite() && g.allFinite();
+  if (!finite_input) GAUSSTRACK_FUZZ_CHECK(status == gausstrack::Status::kNonFiniteInput);
+  GAUSSTRACK_FUZZ_CHECK(out.acceleration.allFinite() && out.constraint_force.allFinite() &&
+                        out.force_from_impressed.allFinite() && out.force_from_rhs.allFinite() &&
+                        out.unconstrained_acceleration.allFinite());
+  if (gausstrack::failed(status)) {
+    GAUSSTRACK_FUZZ_CHECK(out.acceleration.isZero(0) && out.constraint_force.isZero(0) &&
+                          out.force_from_impressed.isZero(0) && out.force_from_rhs.isZero(0));
+  } else {
+    GAUSSTRACK_FUZZ_CHECK(out.diagnostics.rank >= 0 && out.diagnostics.rank <= P);
+    GAUSSTRACK_FUZZ_CHECK(!std::isnan(out.diagnostics.condition_estimate));
+    GAUSSTRACK_FUZZ_CHECK(!std::isnan(out.diagnostics.residual_norm));
+    const typename Solver::VectorN extra = solver.force_for_rhs(g);
+    GAUSSTRACK_FUZZ_CHECK(extra.allFinite());
+  }
+}
+
+void controller_case(FuzzInput& in) {
+  using Model = gausstrack::systems::CoupledDuffing<double>;
+  using Controller = gausstrack::TrackingController<Model>;
+  const std::uint8_t mode = in.byte();
+  const bool raw = (mode & 1) != 0;
+  Model model;
+  model.parameters([&](const char*, double& value) {
+    if (mode & 2) value = in.number(raw);
+  });
+  Controller::Options options;
+  if (mode & 4) {
+    options.stabilization.zeta = in.number(raw);
+    options.stabilization.omega = in.number(raw);
+  }
+  if (mode & 8) options.solver.min_singular_value = in.number(raw);
+  if (options.validate() != nullptr) return;  // the constructor refuses these (tested elsewhere)
+  Controller controller(model, options);
+  Controller::VectorN limit;
+  limit << in.number(raw), in.number(raw);
+  const bool limited = (mode & 16) && controller.set_force_limit(limit);
+
+  Controller::VectorN q, qd;
+  q << in.number(raw), in.number(raw);
+  qd << in.number(raw), in.number(raw);
+  const double t = in.number(raw);
+  Controller::Output out;
+  const gausstrack::Status status = controller.compute(q, qd, t, out);
+  if (!q.allFinite() || !qd.allFinite() || !std::isfinite(t))
+    GAUSSTRACK_FUZZ_CHECK(status == gausstrack::Status::kNonFiniteInput);
+  GAUSSTRACK_FUZZ_CHECK(out.force.allFinite() && out.closed_loop.allFinite() && out.feedforward.allFinite() &&
+                        out.stabilizing.allFinite() && out.acceleration.allFinite());
+  GAUSSTRACK_FUZZ_CHECK(!std::isnan(out.saturation_scale));
+  if (gausstrack::failed(status)) GAUSSTRACK_FUZZ_CHECK(out.force.isZero(0));
+  if (limited) {
+    for (int i = 0; i < 2; ++i) GAUSSTRACK_FUZZ_CHECK(std::abs(out.force(i)) <= limit(i));
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  FuzzInput in(data, size);
+  switch (in.byte() % 4) {
+    case 0: solve_case<2, 1>(in); break;
+    case 1: solve_case<3, 2>(in); break;
+    case 2: solve_case<4, 2>(in); break;
+    default: controller_case(in); break;
+  }
+  return 0;
+}
