@@ -24,6 +24,13 @@ function(gausstrack_enable_sanitizers target)
     target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-sanitize-recover=undefined
                                              -fno-omit-frame-pointer)
     target_link_options(${target} PRIVATE -fsanitize=address,undefined -fno-sanitize-recover=undefined)
+    if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+      # GCC 12's vptr check miscompiles LCM 1.3.1's subscription callback (lcm-cpp-impl.hpp): the
+      # handler is read from the wrong address and called on null, in a 15-line program with a
+      # memq:// subscription too; GCC's ASan alone, its UBSan without vptr and clang's
+      # ASan + UBSan with vptr all run it correctly. Clang's fuzz preset keeps the vptr check.
+      target_compile_options(${target} PRIVATE -fno-sanitize=vptr)
+    endif()
   endif()
   if(GAUSSTRACK_BUILD_FUZZ)
     # Coverage for libFuzzer in every library a fuzz target links; the targets add the driver.
