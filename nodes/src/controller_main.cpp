@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
           code = nodes::run_controller<M>(o, spec);
         }))
       throw plant_sim::SceneError(spec.where + ": unknown model '" + spec.model + "' (compiled in: " +
-                                  plant_sim::kBuiltinModelNames + ")");
+                                  plant_sim::builtin_model_names() + ")");
     return code;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

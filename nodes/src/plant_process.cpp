@@ -27,7 +27,8 @@ int usage(const char* argv0) {
 
 }  // namespace
 
-int plant_main(int argc, char** argv, std::vector<plant_sim::ModelFactory> models) {
+int plant_main(int argc, char** argv, std::vector<plant_sim::ModelFactory> models,
+               std::vector<plant_sim::EngineFactory> engines) {
   using namespace plant_sim;
   ProcessOptions options;
   PlantNodeOptions node_options;
@@ -73,6 +74,7 @@ int plant_main(int argc, char** argv, std::vector<plant_sim::ModelFactory> model
 
     RunOptions run_options;
     run_options.models = std::move(models);
+    run_options.engines = std::move(engines);
     run_options.on_progress = terminal_progress(scene);
     run_options.sampled_control = [&](std::int64_t period, double t, std::span<const double> q,
                                       std::span<const double> qd, std::span<double> u) {

@@ -11,7 +11,7 @@ namespace {
 const std::vector<ModelFactory>& builtin_factories() {
   static const std::vector<ModelFactory> factories = [] {
     std::vector<ModelFactory> all;
-    for (const char* name : {"coupled_duffing", "duffing_chain", "pendulum", "nonholonomic_particle", "planar_arm"})
+    for (const char* name : kBuiltinModels)
       visit_builtin_model(name, [&]<typename M>(std::type_identity<M>) { all.push_back(model_factory<M>(name)); });
     return all;
   }();
@@ -26,6 +26,10 @@ const ModelFactory* find_builtin_model(const std::string& name) {
   return nullptr;
 }
 
-std::string builtin_model_names() { return kBuiltinModelNames; }
+std::string builtin_model_names() {
+  std::string names;
+  for (const char* name : kBuiltinModels) names += (names.empty() ? "" : ", ") + std::string(name);
+  return names;
+}
 
 }  // namespace gausstrack::plant_sim

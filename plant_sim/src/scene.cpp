@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <memory>
@@ -62,6 +63,8 @@ class Reader {
     else out << ":" << (node_.Mark().line + 1) << ": " << path_;
     return out.str();
   }
+
+  const std::string& file() const { return *file_; }
 
   std::string key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
 
@@ -355,13 +358,54 @@ TrackingSpec read_tracking(const Reader& t) {
   return tr;
 }
 
+// plant.engine (other than gausstrack): which engine, its model file, its step and integrator, and
+// the effects it may simulate. The coordinates are the model's joints, by name.
+void read_engine(const Reader& plant, Scene& s) {
+  EngineSpec& e = s.engine;
+  e.name = plant.text("engine");
+  e.where = plant.child("engine").where();
+  if (e.name != "mujoco") plant.child("engine").fail("unknown engine '" + e.name + "' (known: gausstrack, mujoco)");
+  const Reader model = plant.child("model");
+  const std::string file = plant.text("model");
+  if (file.empty()) model.fail("must name the engine's model file (MJCF)");
+  // Relative to the directory of the scene file ("file:line: ..." starts with its path).
+  std::filesystem::path path(file);
+  if (path.is_relative()) {
+    path = std::filesystem::path(plant.file()).parent_path() / path;
+  }
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) model.fail("cannot open the model file " + path.string());
+  e.model_path = path.string();
+  e.timestep = plant.positive("timestep");
+  e.integrator = plant.text("integrator", "rk4");
+  if (e.integrator != "euler" && e.integrator != "rk4" && e.integrator != "implicit")
+    plant.child("integrator").fail("unknown integrator '" + e.integrator + "' (known: euler, rk4, implicit)");
+  if (plant.has("effects"))
+    for (const Reader& r : plant.items("effects")) {
+      if (!r.node().IsScalar()) r.fail("must be an effect's name");
+      const std::string name = r.node().Scalar();
+      if (std::none_of(std::begin(kMujocoEffects), std::end(kMujocoEffects), [&](const char* k) { return name == k; })) {
+        std::string known;
+        for (const char* k : kMujocoEffects) known += std::string(known.empty() ? "" : ", ") + k;
+        r.fail("unknown effect '" + name + "' (known: " + known + ")");
+      }
+      if (std::find(e.effects.begin(), e.effects.end(), name) != e.effects.end()) r.fail("listed twice");
+      e.effects.push_back(name);
+    }
+}
+
 Scene read_scene(const Reader& root) {
   Scene s;
   root.allow_only({"name", "plant", "tracking", "control", "integrator", "duration", "output_period"});
   s.name = root.text("name", "");
 
   const Reader plant = root.child("plant");
-  plant.allow_only({"coordinates", "masses", "model", "parameters", "initial", "effects", "constraints", "projection"});
+  const bool engine = plant.has("engine") && !(plant.child("engine").node().IsScalar() &&
+                                                plant.child("engine").node().Scalar() == "gausstrack");
+  if (engine)
+    plant.allow_only({"engine", "model", "coordinates", "timestep", "integrator", "effects", "initial"});
+  else
+    plant.allow_only({"engine", "coordinates", "masses", "model", "parameters", "initial", "effects", "constraints", "projection"});
   for (const Reader& c : plant.items("coordinates")) {
     if (!c.node().IsScalar() || c.node().Scalar().empty()) c.fail("must be a coordinate name");
     const std::string n = c.node().Scalar();
@@ -373,7 +417,9 @@ Scene read_scene(const Reader& root) {
   const int n = s.dof();
   if (n < 1 || n > kMaxCoordinates)
     plant.child("coordinates").fail("a plant has 1 to " + std::to_string(kMaxCoordinates) + " coordinates (got " + std::to_string(n) + ")");
-  if (plant.has("model")) {
+  if (engine) {
+    read_engine(plant, s);
+  } else if (plant.has("model")) {
     // The plant is a model's own dynamics (A, f, Q); the effects listed add to them.
     if (plant.has("masses")) plant.child("masses").fail("a plant is either point masses or a model, not both");
     s.plant_model = plant.text("model");
@@ -407,7 +453,7 @@ Scene read_scene(const Reader& root) {
     s.q0.push_back(initial.number(("q" + std::to_string(i)).c_str(), 0.0));
     s.qd0.push_back(initial.number(("qd" + std::to_string(i)).c_str(), 0.0));
   }
-  if (plant.has("effects"))
+  if (plant.has("effects") && !engine)
     for (const Reader& e : plant.items("effects")) {
       s.effects.push_back(read_effect(e, s.coordinates));
       if (s.effects.back().kind == EffectKind::kGravity && !s.plant_model.empty())
@@ -448,10 +494,19 @@ Scene read_scene(const Reader& root) {
     if (s.effects[i].kind == EffectKind::kSensorNoise && s.control_mode != ControlMode::kSampled)
       plant.items("effects")[i].fail("sensor_noise needs control.mode: sampled (noise inside an adaptive integrator is not defined)");
 
-  const Reader integ = root.child("integrator");
-  integ.allow_only({"method", "tolerance", "step", "min_step", "max_steps"});
-  const std::string method = integ.text("method");
-  if (method == "rk4") {
+  if (engine) {
+    if (root.has("integrator"))
+      root.child("integrator").fail("the engine integrates this plant: set plant.timestep and plant.integrator");
+    if (s.control_mode != ControlMode::kSampled)
+      plant.child("engine").fail("an engine steps under a held command: needs control.mode: sampled");
+  }
+  const Reader integ = engine ? root : root.child("integrator");
+  if (!engine) integ.allow_only({"method", "tolerance", "step", "min_step", "max_steps"});
+  const std::string method = engine ? "rk4" : integ.text("method");
+  if (engine) {
+    s.method = Method::kRk4;
+    s.step = s.engine.timestep;
+  } else if (method == "rk4") {
     s.method = Method::kRk4;
     s.step = integ.positive("step");
   } else if (method == "dopri5" || method == "rkf78") {
@@ -472,8 +527,8 @@ Scene read_scene(const Reader& root) {
               Reader::format(kMaxSamples) + "): raise output_period or shorten duration");
   if (s.duration * std::numeric_limits<double>::epsilon() * 1e3 > s.output_period)
     root.child("duration").fail("is too long for its output grid to be resolved in double precision");
-  s.min_step = integ.positive("min_step", 1e-12 * s.duration);
-  s.max_steps = integ.positive("max_steps", s.max_steps);
+  s.min_step = engine ? 1e-12 * s.duration : integ.positive("min_step", 1e-12 * s.duration);
+  if (!engine) s.max_steps = integ.positive("max_steps", s.max_steps);
   if (s.method == Method::kRk4 && s.duration / s.step > s.max_steps)
     integ.child("step").fail("gives " + Reader::format(s.duration / s.step) + " steps, above integrator.max_steps (" +
                              Reader::format(s.max_steps) + ")");
@@ -483,12 +538,14 @@ Scene read_scene(const Reader& root) {
   if (s.method == Method::kRk4) {
     const double ratio = s.output_period / s.step;
     if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio)
-      root.child("output_period").fail("must be a whole number of rk4 steps (step " + Reader::format(s.step) + ")");
+      root.child("output_period").fail(std::string("must be a whole number of ") + (engine ? "engine" : "rk4") +
+                                       " steps (step " + Reader::format(s.step) + ")");
   }
   if (s.control_mode == ControlMode::kSampled && s.method == Method::kRk4) {
     const double ratio = 1.0 / (s.control_rate * s.step);
     if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio)
-      root.child("control").fail("the control period must be a whole number of rk4 steps");
+      root.child("control").fail(std::string("the control period must be a whole number of ") +
+                                 (engine ? "engine" : "rk4") + " steps (step " + Reader::format(s.step) + ")");
   }
   return s;
 }

@@ -8,6 +8,9 @@
 
 #include "gausstrack/plant_sim/scene.hpp"
 #include "gausstrack/plant_sim/simulation.hpp"
+#ifdef GAUSSTRACK_HAVE_MUJOCO
+#include "gausstrack/plant_sim/mujoco.hpp"
+#endif
 
 namespace {
 
@@ -44,6 +47,9 @@ int main(int argc, char** argv) {
     const Scene scene = load_scene(scene_path, sets);
     RunOptions options;
     options.on_progress = terminal_progress(scene);
+#ifdef GAUSSTRACK_HAVE_MUJOCO
+    options.engines.push_back(mujoco_engine());
+#endif
     // Ctrl-C (or SIGTERM) stops the run where it is; what it computed is written.
     std::signal(SIGINT, [](int) { g_interrupted = 1; });
     std::signal(SIGTERM, [](int) { g_interrupted = 1; });

@@ -53,9 +53,9 @@ class Plant {
       if (model_->dof() != n_)
         throw SceneError(s.plant_model_where + ": model '" + s.plant_model + "' has " +
                          std::to_string(model_->dof()) + " coordinates, the plant lists " + std::to_string(n_));
-    } else {
+    } else if (!s.masses.empty()) {
       mass_ = Eigen::Map<const V>(s.masses.data(), n_);
-    }
+    }  // else an engine's plant: its physics are the engine's
     for (const EffectSpec& e : s.effects) {
       switch (e.kind) {
         case EffectKind::kActuatorSaturation: saturation_ = e; break;
@@ -294,6 +294,14 @@ RunResult run(const Scene& s, const RunOptions& options) {
   result.samples.reserve(sample_count);
   Plant plant(s, options);
   Control control(s, options);
+  std::unique_ptr<PlantEngine> engine;
+  if (!s.engine.name.empty()) {
+    for (const EngineFactory& f : options.engines)
+      if (f.name == s.engine.name) engine = f.make(s);
+    if (!engine) throw SceneError(s.engine.where + ": this program was built without the '" + s.engine.name + "' engine");
+    stats.engine = engine->description();
+    stats.engine_effects = s.engine.effects;
+  }
   const bool project = s.projection && plant.has_constraints();
 
   const bool sampled = s.control_mode == ControlMode::kSampled;
@@ -420,7 +428,25 @@ RunResult run(const Scene& s, const RunOptions& options) {
       }
     };
 
-    if (s.method == Method::kDopri5) {
+    if (engine) {
+      // The engine's fixed steps under the held force; its state is the plant's.
+      const auto n_steps = static_cast<long>(std::llround((t1 - t0) / s.step));
+      for (long i = 0; i < n_steps; ++i) {
+        const double t = t0 + static_cast<double>(i + 1) * s.step;
+        if (const std::string why = engine->step(held.data()); !why.empty()) {
+          fail(t - s.step, why);
+          going = false;
+          break;
+        }
+        engine->state(x.data(), x.data() + N);
+        ++stats.steps;
+        if (x.allFinite()) emit_until(t, [&](double) { return x; });
+        if (!step_ok(t, x, s.step)) {
+          going = false;
+          break;
+        }
+      }
+    } else if (s.method == Method::kDopri5) {
       // Dense output: steps are chosen by the error control alone; samples are interpolated.
       dense.initialize(x, t0, dt);
       while (dense.current_time() < t1 * (1 - 1e-15)) {
@@ -629,6 +655,13 @@ void write_summary_json(const Scene& scene, const RunResult& result, const std::
   for (std::size_t k = 0; k < s.effect_evaluations.size(); ++k)
     out << (k ? ", " : "") << "\"" << to_string(static_cast<EffectKind>(k)) << "\": " << s.effect_evaluations[k];
   out << "},\n";
+  // Which engine stepped the plant, and which of its effects were on (all others were off).
+  out << "  \"engine\": " << (s.engine.empty() ? std::string("null") : "\"" + s.engine + "\"") << ",\n";
+  if (!s.engine.empty()) {
+    out << "  \"engine_effects\": [";
+    for (std::size_t k = 0; k < s.engine_effects.size(); ++k) out << (k ? ", " : "") << "\"" << s.engine_effects[k] << "\"";
+    out << "],\n";
+  }
   if (!extra_members.empty()) out << "  " << extra_members << ",\n";
   num("wall_time_s", s.wall_time_s, false);
   out << "}\n";

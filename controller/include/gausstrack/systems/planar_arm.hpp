@@ -17,7 +17,8 @@ namespace gausstrack::systems {
 /// of inertia I_i about that centre.
 ///   A(q) = sum_i m_i Jv_i^T Jv_i + I_i Jw_i^T Jw_i   (Jv_i: centre of mass i, Jw_i = [1 .. 1 0 ..])
 ///   f(q, q') = sum_i m_i Jv_i^T (Jv_i' q')           Coriolis and centrifugal forces [N m]
-///   Q(q) = sum_i m_i Jv_i^T (0, -gravity)            gravity, an impressed force [N m]
+///   Q(q, q') = sum_i m_i Jv_i^T (0, -gravity) - damping q'   gravity and viscous joint damping,
+///                                                    impressed forces [N m]
 /// Constraint: the hand p(q) = sum_i l_i (cos theta_i, sin theta_i) on the circle
 ///   phi(q, t) = p(q) - c - R (cos(w t + phase), sin(w t + phase)) = 0   (two rows).
 template <typename Scalar_ = double>
@@ -34,6 +35,7 @@ struct PlanarArm {
   Vector com{Scalar(0.5), Scalar(0.4), Scalar(0.3)};       ///< r_i [m]
   Vector inertia{Scalar(1) / 6, Scalar(0.08), Scalar(0.03)};  ///< I_i about the centre [kg m^2]
   Scalar gravity = Scalar(9.81);                           ///< [m/s^2], along -y
+  Scalar damping = Scalar(0);                              ///< viscous damping of every joint [N m s/rad]
   // The circle the hand tracks.
   Scalar center_x = Scalar(1.2), center_y = Scalar(0.6);   ///< c [m]
   Scalar radius = Scalar(0.3);                             ///< R [m]
@@ -50,7 +52,7 @@ struct PlanarArm {
                                                  {"inertia_1", "inertia_2", "inertia_3"}};
     for (int i = 0; i < 3; ++i)
       f(kNames[0][i], mass(i)), f(kNames[1][i], length(i)), f(kNames[2][i], com(i)), f(kNames[3][i], inertia(i));
-    f("gravity", gravity), f("center_x", center_x), f("center_y", center_y), f("radius", radius);
+    f("gravity", gravity), f("damping", damping), f("center_x", center_x), f("center_y", center_y), f("radius", radius);
     f("rate", rate), f("phase", phase);
   }
 
@@ -86,6 +88,7 @@ struct PlanarArm {
       terms.nonlinear_force.noalias() += mass(i) * jv.transpose() * bias;
       terms.applied_force -= (mass(i) * gravity) * jv.row(1).transpose();
     }
+    terms.applied_force -= damping * qd;
   }
 
   /// The hand's position p(q) [m].

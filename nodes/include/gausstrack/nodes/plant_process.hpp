@@ -14,9 +14,12 @@
 #include <vector>
 
 #include "gausstrack/plant_sim/models.hpp"
+#include "gausstrack/plant_sim/simulation.hpp"
 
 namespace gausstrack::nodes {
 
-int plant_main(int argc, char** argv, std::vector<plant_sim::ModelFactory> models = {});
+/// `engines`: the physics engines a scene may name (plant.engine), e.g. plant_sim::mujoco_engine().
+int plant_main(int argc, char** argv, std::vector<plant_sim::ModelFactory> models = {},
+               std::vector<plant_sim::EngineFactory> engines = {});
 
 }  // namespace gausstrack::nodes

@@ -5,6 +5,7 @@
 #include <string_view>
 #include <type_traits>
 
+#include "gausstrack/systems/cart_double_pendulum.hpp"
 #include "gausstrack/systems/coupled_duffing.hpp"
 #include "gausstrack/systems/duffing_chain.hpp"
 #include "gausstrack/systems/nonholonomic_particle.hpp"
@@ -25,10 +26,12 @@ bool visit_builtin_model(std::string_view name, F&& f) {
   if (name == "pendulum") return f(std::type_identity<systems::Pendulum<double>>{}), true;
   if (name == "nonholonomic_particle") return f(std::type_identity<systems::NonholonomicParticle<double>>{}), true;
   if (name == "planar_arm") return f(std::type_identity<systems::PlanarArm<double>>{}), true;
+  if (name == "cart_double_pendulum") return f(std::type_identity<systems::CartDoublePendulum<double>>{}), true;
   return false;
 }
 
-inline constexpr const char* kBuiltinModelNames =
-    "coupled_duffing, duffing_chain, pendulum, nonholonomic_particle, planar_arm";
+/// Every name visit_builtin_model knows, in one list.
+inline constexpr const char* kBuiltinModels[] = {"coupled_duffing", "duffing_chain", "pendulum",
+                                                 "nonholonomic_particle", "planar_arm", "cart_double_pendulum"};
 
 }  // namespace gausstrack::plant_sim

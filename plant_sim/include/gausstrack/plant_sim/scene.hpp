@@ -87,6 +87,20 @@ struct TrackingSpec {
   }
 };
 
+/// A plant stepped by a physics engine instead of plant_sim's own integrator (plant.engine).
+struct EngineSpec {
+  std::string name;        ///< "mujoco"; empty: plant_sim's own (point masses or a model)
+  std::string model_path;  ///< plant.model: the engine's model file (MJCF), resolved against the scene's directory
+  std::string where;       ///< where plant.engine was written
+  double timestep = 0;     ///< the engine's fixed step [s]
+  std::string integrator = "rk4";     ///< euler | rk4 | implicit
+  std::vector<std::string> effects;   ///< the engine's effects switched on; all others are off
+};
+
+/// The effects a MuJoCo plant may list; everything unlisted is switched off.
+inline constexpr const char* kMujocoEffects[] = {"gravity", "damping", "springs", "armature",
+                                                 "frictionloss", "limits", "contact", "equality"};
+
 enum class ControlMode : std::uint8_t { kContinuous, kSampled };
 enum class Method : std::uint8_t { kRk4, kDopri5, kRkf78 };
 
@@ -100,6 +114,10 @@ struct Scene {
   std::string plant_model;                       ///< plant.model: a model's name
   std::string plant_model_where;
   std::vector<ModelParameter> plant_parameters;  ///< plant.parameters (model mismatch)
+  /// plant.engine: a physics engine steps the plant (coordinates are then its joints' names,
+  /// control is sampled, and the integrator is the engine's: method rk4 with step = timestep
+  /// stands for it in the checks of output and control periods).
+  EngineSpec engine;
   std::vector<double> q0, qd0;
   std::vector<EffectSpec> effects;
   std::vector<ConstraintSpec> constraints;

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -43,6 +44,31 @@ struct RunSummary {
   double failed_at = 0;  ///< simulated time of the failure [s]
   /// Evaluations of each effect kind (indexed by EffectKind): zero for every kind not listed.
   std::array<std::uint64_t, static_cast<std::size_t>(EffectKind::kCount)> effect_evaluations{};
+  /// The engine that stepped the plant (plant.engine), e.g. "mujoco 2.2.2, rk4, timestep 0.0001 s";
+  /// empty for plant_sim's own integrator.
+  std::string engine;
+  std::vector<std::string> engine_effects;  ///< the engine's effects that were on
+};
+
+/// A plant stepped by a physics engine (plant.engine): fixed steps of the scene's timestep under
+/// a generalized force held over each step, in the scene's coordinates.
+class PlantEngine {
+ public:
+  virtual ~PlantEngine() = default;
+  /// Advances one step under force u (one entry per coordinate). Returns an empty string, or why
+  /// the plant cannot go on (the engine failed, or reset its state); the run then ends with it.
+  virtual std::string step(const double* u) = 0;
+  /// The state after the last step (at first, the scene's initial state).
+  virtual void state(double* q, double* qd) const = 0;
+  /// For the summary: the engine, its version, integrator and step.
+  virtual std::string description() const = 0;
+};
+
+/// An engine made available to scenes by name (plant.engine).
+struct EngineFactory {
+  std::string name;
+  /// Builds the engine for a scene; throws SceneError for a model that does not fit the scene.
+  std::function<std::unique_ptr<PlantEngine>(const Scene&)> make;
 };
 
 struct RunResult {
@@ -63,6 +89,9 @@ struct RunOptions {
   /// Models the scene may name (tracking.model, plant.model) besides the compiled-in ones: how a
   /// user's own model runs, e.g. models = {model_factory<MyModel>("my_model")}.
   std::vector<ModelFactory> models;
+  /// The engines scenes may name (plant.engine): the programs pass mujoco_engine() when built with
+  /// MuJoCo.
+  std::vector<EngineFactory> engines;
   /// Polled between steps: true stops the run where it is (stopped_early), keeping its samples.
   std::function<bool()> stop_requested;
 };

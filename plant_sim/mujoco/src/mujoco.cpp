@@ -1,0 +1,202 @@
+#include "gausstrack/plant_sim/mujoco.hpp"
+
+#include <mujoco/mujoco.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+
+namespace gausstrack::plant_sim {
+namespace {
+
+// mju_error would print, wait for Enter and end the process; here it becomes an exception that
+// ends the run with MuJoCo's message.
+[[noreturn]] void throw_error(const char* message) { throw std::runtime_error(std::string("MuJoCo: ") + message); }
+// Warnings are read from mjData's counters after each step; none is written to MUJOCO_LOG.TXT.
+void ignore_warning(const char*) {}
+
+void install_handlers() {
+  mju_user_error = throw_error;
+  mju_user_warning = ignore_warning;
+}
+
+bool listed(const EngineSpec& spec, const char* effect) {
+  return std::find(spec.effects.begin(), spec.effects.end(), effect) != spec.effects.end();
+}
+
+std::string g(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", v);
+  return b;
+}
+
+// The warnings with which mj_step resets the state to qpos0 (or computes from a singular M).
+constexpr struct {
+  int index;
+  const char* what;
+} kResetWarnings[] = {{mjWARN_BADQPOS, "a bad number in qpos"},
+                      {mjWARN_BADQVEL, "a bad number in qvel"},
+                      {mjWARN_BADQACC, "a bad number or an acceleration above 1e10 in qacc"},
+                      {mjWARN_INERTIA, "a (near) singular mass matrix"}};
+
+}  // namespace
+
+MujocoModel::MujocoModel(const EngineSpec& spec, const std::vector<std::string>& joints) {
+  install_handlers();
+  char error[1000] = "";
+  try {
+    m_ = mj_loadXML(spec.model_path.c_str(), nullptr, error, sizeof error);
+  } catch (const std::exception& e) {
+    throw SceneError(spec.model_path + ": " + e.what());
+  }
+  if (!m_) throw SceneError(spec.model_path + ": MuJoCo cannot load it: " + error);
+  auto fail = [&](const std::string& why) {
+    mj_deleteModel(m_);
+    m_ = nullptr;
+    throw SceneError(spec.model_path + ": " + why);
+  };
+  // The coordinates: one hinge or slide joint each, covering every degree of freedom once.
+  for (const std::string& name : joints) {
+    const int j = mj_name2id(m_, mjOBJ_JOINT, name.c_str());
+    if (j < 0) fail("has no joint named '" + name + "' (the scene's plant.coordinates are the model's joints)");
+    if (m_->jnt_type[j] != mjJNT_HINGE && m_->jnt_type[j] != mjJNT_SLIDE)
+      fail("joint '" + name + "' is not a hinge or a slide (a coordinate is one scalar joint)");
+    qpos_index_.push_back(m_->jnt_qposadr[j]);
+    dof_index_.push_back(m_->jnt_dofadr[j]);
+  }
+  if (m_->nv != static_cast<int>(joints.size()))
+    fail("has " + std::to_string(m_->nv) + " degrees of freedom; the scene names " + std::to_string(joints.size()) +
+         " joints (name every joint, in the controller's order)");
+
+  // Only the listed effects: the disable flags for whole features, the model's own fields where
+  // one flag covers two effects (PASSIVE is springs and dampers together) or none exists.
+  const int physical = mjDSBL_CONSTRAINT | mjDSBL_EQUALITY | mjDSBL_FRICTIONLOSS | mjDSBL_LIMIT | mjDSBL_CONTACT |
+                       mjDSBL_PASSIVE | mjDSBL_GRAVITY | mjDSBL_ACTUATION;
+  int off = mjDSBL_ACTUATION;  // the command is a generalized force; the model's actuators never act
+  if (!listed(spec, "gravity")) off |= mjDSBL_GRAVITY;
+  if (!listed(spec, "contact")) off |= mjDSBL_CONTACT;
+  if (!listed(spec, "frictionloss")) off |= mjDSBL_FRICTIONLOSS;
+  if (!listed(spec, "limits")) off |= mjDSBL_LIMIT;
+  if (!listed(spec, "equality")) off |= mjDSBL_EQUALITY;
+  if (!listed(spec, "contact") && !listed(spec, "frictionloss") && !listed(spec, "limits") && !listed(spec, "equality"))
+    off |= mjDSBL_CONSTRAINT;
+  if (!listed(spec, "damping") && !listed(spec, "springs")) off |= mjDSBL_PASSIVE;
+  m_->opt.disableflags = (m_->opt.disableflags & ~physical) | off;
+  if (!listed(spec, "damping")) {
+    std::fill_n(m_->dof_damping, m_->nv, 0.0);
+    std::fill_n(m_->tendon_damping, m_->ntendon, 0.0);
+  }
+  if (!listed(spec, "springs")) {
+    std::fill_n(m_->jnt_stiffness, m_->njnt, 0.0);
+    std::fill_n(m_->tendon_stiffness, m_->ntendon, 0.0);
+  }
+  if (!listed(spec, "armature")) std::fill_n(m_->dof_armature, m_->nv, 0.0);
+  // Fluid forces (passive, from the medium) are not offered: always off.
+  m_->opt.density = 0;
+  m_->opt.viscosity = 0;
+  std::fill_n(m_->opt.wind, 3, 0.0);
+
+  m_->opt.timestep = spec.timestep;
+  integrator_ = spec.integrator;
+  m_->opt.integrator = spec.integrator == "euler" ? mjINT_EULER : spec.integrator == "implicit" ? mjINT_IMPLICIT : mjINT_RK4;
+  try {
+    d_ = mj_makeData(m_);
+  } catch (const std::exception& e) {
+    fail(e.what());
+  }
+  if (!d_) fail("MuJoCo cannot allocate its data");
+  std::vector<double> zero(joints.size(), 0.0);
+  for (std::size_t i = 0; i < joints.size(); ++i) zero[i] = d_->qpos[qpos_index_[i]];
+  set_state(zero.data(), std::vector<double>(joints.size(), 0.0).data());
+}
+
+MujocoModel::~MujocoModel() {
+  if (d_) mj_deleteData(d_);
+  if (m_) mj_deleteModel(m_);
+}
+
+void MujocoModel::set_state(const double* q, const double* qd, double t) {
+  for (int i = 0; i < dof(); ++i) {
+    d_->qpos[qpos_index_[static_cast<std::size_t>(i)]] = q[i];
+    d_->qvel[dof_index_[static_cast<std::size_t>(i)]] = qd[i];
+  }
+  d_->time = t;
+  mj_forward(m_, d_);
+}
+
+void MujocoModel::state(double* q, double* qd) const {
+  for (int i = 0; i < dof(); ++i) {
+    q[i] = d_->qpos[qpos_index_[static_cast<std::size_t>(i)]];
+    qd[i] = d_->qvel[dof_index_[static_cast<std::size_t>(i)]];
+  }
+}
+
+void MujocoModel::mass_matrix(double* A) const {
+  const int nv = m_->nv;
+  std::vector<double> full(static_cast<std::size_t>(nv * nv));
+  mj_fullM(m_, full.data(), d_->qM);
+  for (int j = 0; j < dof(); ++j)
+    for (int i = 0; i < dof(); ++i)
+      A[j * dof() + i] = full[static_cast<std::size_t>(dof_index_[static_cast<std::size_t>(i)] * nv +
+                                                       dof_index_[static_cast<std::size_t>(j)])];
+}
+
+void MujocoModel::bias_minus_passive(double* r) const {
+  for (int i = 0; i < dof(); ++i) {
+    const int k = dof_index_[static_cast<std::size_t>(i)];
+    r[i] = d_->qfrc_bias[k] - d_->qfrc_passive[k];
+  }
+}
+
+std::string MujocoModel::step(const double* u) {
+  for (int i = 0; i < dof(); ++i) d_->qfrc_applied[dof_index_[static_cast<std::size_t>(i)]] = u[i];
+  int before[std::size(kResetWarnings)];
+  for (std::size_t k = 0; k < std::size(kResetWarnings); ++k) before[k] = d_->warning[kResetWarnings[k].index].number;
+  const double t = d_->time;
+  try {
+    mj_step(m_, d_);
+  } catch (const std::exception& e) {
+    return std::string(e.what()) + " (at t = " + g(t) + " s)";
+  }
+  for (std::size_t k = 0; k < std::size(kResetWarnings); ++k)
+    if (d_->warning[kResetWarnings[k].index].number != before[k])
+      return "MuJoCo met " + std::string(kResetWarnings[k].what) + " in the step from t = " + g(t) +
+             " s (it resets the state and goes on; the run cannot)";
+  for (int i = 0; i < m_->nq; ++i)
+    if (!std::isfinite(d_->qpos[i])) return "MuJoCo's qpos left the finite range at t = " + g(d_->time) + " s";
+  for (int i = 0; i < m_->nv; ++i)
+    if (!std::isfinite(d_->qvel[i])) return "MuJoCo's qvel left the finite range at t = " + g(d_->time) + " s";
+  return {};
+}
+
+std::string MujocoModel::description() const {
+  return "mujoco " + mujoco_version() + ", " + integrator_ + ", timestep " + g(m_->opt.timestep) + " s";
+}
+
+std::string mujoco_version() {
+  const int v = mj_version();
+  return std::to_string(v / 100) + "." + std::to_string(v / 10 % 10) + "." + std::to_string(v % 10);
+}
+
+namespace {
+
+class MujocoEngine final : public PlantEngine {
+ public:
+  explicit MujocoEngine(const Scene& s) : model_(s.engine, s.coordinates) { model_.set_state(s.q0.data(), s.qd0.data(), 0); }
+  std::string step(const double* u) override { return model_.step(u); }
+  void state(double* q, double* qd) const override { model_.state(q, qd); }
+  std::string description() const override { return model_.description(); }
+
+ private:
+  MujocoModel model_;
+};
+
+}  // namespace
+
+EngineFactory mujoco_engine() {
+  return {"mujoco", [](const Scene& s) -> std::unique_ptr<PlantEngine> { return std::make_unique<MujocoEngine>(s); }};
+}
+
+}  // namespace gausstrack::plant_sim
