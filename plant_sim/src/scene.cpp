@@ -65,6 +65,8 @@ class Reader {
   }
 
   const std::string& file() const { return *file_; }
+  /// True when `key` of this node was given by an override (--set) rather than by the file.
+  bool overridden(const char* key) const { return overridden_->count(key_path(key)) > 0; }
 
   std::string key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
 
@@ -368,9 +370,9 @@ void read_engine(const Reader& plant, Scene& s) {
   const Reader model = plant.child("model");
   const std::string file = plant.text("model");
   if (file.empty()) model.fail("must name the engine's model file (MJCF)");
-  // Relative to the directory of the scene file ("file:line: ..." starts with its path).
+  // Relative to the directory of the scene file; given by --set, relative to the working directory.
   std::filesystem::path path(file);
-  if (path.is_relative()) {
+  if (path.is_relative() && !plant.overridden("model")) {
     path = std::filesystem::path(plant.file()).parent_path() / path;
   }
   std::error_code ec;
@@ -509,11 +511,11 @@ Scene read_scene(const Reader& root) {
   } else if (method == "rk4") {
     s.method = Method::kRk4;
     s.step = integ.positive("step");
-  } else if (method == "dopri5" || method == "rkf78") {
-    s.method = method == "dopri5" ? Method::kDopri5 : Method::kRkf78;
+  } else if (method == "dopri5" || method == "rkf78" || method == "bulirsch_stoer") {
+    s.method = method == "dopri5" ? Method::kDopri5 : method == "rkf78" ? Method::kRkf78 : Method::kBulirschStoer;
     s.tolerance = integ.positive("tolerance");
   } else {
-    integ.child("method").fail("unknown integrator '" + method + "' (known: rk4, dopri5, rkf78)");
+    integ.child("method").fail("unknown integrator '" + method + "' (known: rk4, dopri5, rkf78, bulirsch_stoer)");
   }
 
   s.duration = root.positive("duration");

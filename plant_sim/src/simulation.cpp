@@ -349,7 +349,12 @@ RunResult run(const Scene& s, const RunOptions& options) {
   using Dopri = odeint::runge_kutta_dopri5<State, double, State, double, odeint::vector_space_algebra>;
   using Rkf78 = odeint::runge_kutta_fehlberg78<State, double, State, double, odeint::vector_space_algebra>;
   using Rk4 = odeint::runge_kutta4<State, double, State, double, odeint::vector_space_algebra>;
-  auto dense = odeint::make_dense_output(s.tolerance, s.tolerance, Dopri());
+  auto dopri5 = odeint::make_dense_output(s.tolerance, s.tolerance, Dopri());
+  // Bulirsch-Stoer (Richardson extrapolation of modified midpoint steps, dense output): a
+  // high-accuracy choice for offline runs; it allocates its extrapolation tables as it goes.
+  // Its interpolation is error-controlled too: a sampled run restarts from the interpolated state.
+  odeint::bulirsch_stoer_dense_out<State, double, State, double, odeint::vector_space_algebra> bulirsch_stoer(
+      s.tolerance, s.tolerance, 1.0, 1.0, 0.0, true);
   auto controlled = odeint::make_controlled(s.tolerance, s.tolerance, Rkf78());
   Rk4 rk4;
   double dt = s.method == Method::kRk4 ? s.step : std::min(1e-3, period);
@@ -397,6 +402,60 @@ RunResult run(const Scene& s, const RunOptions& options) {
     return true;
   };
   bool going = true;
+  // Samples due by t_reached, from state_at(t).
+  auto emit_until = [&](double t_reached, auto&& state_at) {
+    while (next_sample < sample_count && sample_time(next_sample) <= t_reached * (1 + 1e-14)) {
+      record(state_at(sample_time(next_sample)), sample_time(next_sample));
+      ++next_sample;
+    }
+  };
+  // One control period (or the whole run) with a dense-output stepper (dopri5, Bulirsch-Stoer):
+  // steps are chosen by the error control alone; samples are interpolated. False when the run
+  // cannot go on.
+  auto dense_segment = [&](auto& dense, double t0, double t1) -> bool {
+    dense.initialize(x, t0, dt);
+    while (dense.current_time() < t1 * (1 - 1e-15)) {
+      try {
+        dense.do_step(rhs);
+      } catch (const std::exception& e) {  // odeint gives up after 500 rejected steps
+        fail(dense.current_time(), std::string("the integrator could not take a step at t = ") +
+                                       g(dense.current_time()) + " s (" + e.what() + "): " +
+                                       describe(dense.current_state()));
+        going = false;
+        break;
+      }
+      ++stats.steps;
+      // Samples up to a finite step are kept even when the run cannot go on after it.
+      if (dense.current_state().allFinite()) {
+        const double reached = std::min(dense.current_time(), t1);
+        emit_until(reached, [&](double ts) {
+          State xs(2 * N);
+          dense.calc_state(ts, xs);
+          if (project) plant.project(xs, ts, stats);  // the plant's state is the projected one
+          return xs;
+        });
+      }
+      if (!step_ok(dense.current_time(), dense.current_state(), dense.current_time_step())) {
+        going = false;
+        break;
+      }
+      if (project && dense.current_time() < t1 * (1 - 1e-15)) {
+        // The next step starts from the projected state (dense output restarts there).
+        State xp = dense.current_state();
+        plant.project(xp, dense.current_time(), stats);
+        dense.initialize(xp, dense.current_time(), dense.current_time_step());
+      }
+    }
+    if (!going) return false;
+    dt = dense.current_time_step();
+    if (dense.current_time() > t1) {
+      dense.calc_state(t1, x);
+    } else {
+      x = dense.current_state();
+    }
+    if (project) plant.project(x, t1, stats);
+    return true;
+  };
 
   for (std::size_t k = 0; k < segments && going; ++k) {
     const double t0 = static_cast<double>(k) * period;
@@ -421,12 +480,6 @@ RunResult run(const Scene& s, const RunOptions& options) {
       record(x, 0.0);
       next_sample = 1;
     }
-    auto emit_until = [&](double t_reached, auto&& state_at) {
-      while (next_sample < sample_count && sample_time(next_sample) <= t_reached * (1 + 1e-14)) {
-        record(state_at(sample_time(next_sample)), sample_time(next_sample));
-        ++next_sample;
-      }
-    };
 
     if (engine) {
       // The engine's fixed steps under the held force; its state is the plant's.
@@ -447,48 +500,9 @@ RunResult run(const Scene& s, const RunOptions& options) {
         }
       }
     } else if (s.method == Method::kDopri5) {
-      // Dense output: steps are chosen by the error control alone; samples are interpolated.
-      dense.initialize(x, t0, dt);
-      while (dense.current_time() < t1 * (1 - 1e-15)) {
-        try {
-          dense.do_step(rhs);
-        } catch (const std::exception& e) {  // odeint gives up after 500 rejected steps
-          fail(dense.current_time(), std::string("the integrator could not take a step at t = ") +
-                                         g(dense.current_time()) + " s (" + e.what() + "): " +
-                                         describe(dense.current_state()));
-          going = false;
-          break;
-        }
-        ++stats.steps;
-        // Samples up to a finite step are kept even when the run cannot go on after it.
-        if (dense.current_state().allFinite()) {
-          const double reached = std::min(dense.current_time(), t1);
-          emit_until(reached, [&](double ts) {
-            State xs(2 * N);
-            dense.calc_state(ts, xs);
-            if (project) plant.project(xs, ts, stats);  // the plant's state is the projected one
-            return xs;
-          });
-        }
-        if (!step_ok(dense.current_time(), dense.current_state(), dense.current_time_step())) {
-          going = false;
-          break;
-        }
-        if (project && dense.current_time() < t1 * (1 - 1e-15)) {
-          // The next step starts from the projected state (dense output restarts there).
-          State xp = dense.current_state();
-          plant.project(xp, dense.current_time(), stats);
-          dense.initialize(xp, dense.current_time(), dense.current_time_step());
-        }
-      }
-      if (!going) break;
-      dt = dense.current_time_step();
-      if (dense.current_time() > t1) {
-        dense.calc_state(t1, x);
-      } else {
-        x = dense.current_state();
-      }
-      if (project) plant.project(x, t1, stats);
+      if (!dense_segment(dopri5, t0, t1)) break;
+    } else if (s.method == Method::kBulirschStoer) {
+      if (!dense_segment(bulirsch_stoer, t0, t1)) break;
     } else if (s.method == Method::kRkf78) {
       // No dense output in odeint for this method: steps are clipped to end exactly on sample
       // and segment times (a clipped step does not shrink the step size used afterwards).
@@ -564,6 +578,8 @@ V to_vector(const std::vector<double>& v, const Scene& s) {
 
 std::vector<double> evaluate(const Scene& s, const std::vector<double>& q, const std::vector<double>& qd, double t,
                              const std::vector<double>* u) {
+  if (!s.engine.name.empty())
+    throw SceneError(s.engine.where + ": this plant's physics are the '" + s.engine.name + "' engine's, not plant_sim's");
   Plant plant(s, RunOptions{});
   RunSummary stats;
   const V r = u ? plant.acceleration(to_vector(q, s), to_vector(qd, s), t, to_vector(*u, s), stats)

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
+#include <mujoco/mujoco.h>
+
 #include <cmath>
 #include <random>
 #include <string>
@@ -218,6 +220,27 @@ TEST(MujocoFailures, DivergingPlantEndsTheRunWithItsReason) {
     for (double v : s.q) ASSERT_TRUE(std::isfinite(v));
 }
 
+// MuJoCo's control callback calls mju_error from inside mj_step after 5 ms: unhandled, MuJoCo
+// would print and end the process.
+void error_after_5ms(const mjModel*, mjData* d) {
+  if (d->time > 5e-3) mju_error("injected error");
+}
+
+TEST(MujocoFailures, MujocoErrorsEndTheRunNotTheProcess) {
+  mjcb_control = error_after_5ms;
+  const RunResult r = run("planar_arm_mujoco.yaml", {"duration=1.0"});
+  mjcb_control = nullptr;
+  ASSERT_FALSE(r.summary.failure.empty());
+  EXPECT_NE(r.summary.failure.find("MuJoCo: injected error"), std::string::npos) << r.summary.failure;
+  EXPECT_GE(r.summary.failed_at, 4.9e-3);  // the step that met it started at 5 ms or just before
+  EXPECT_LT(r.summary.failed_at, 6e-3);
+  EXPECT_EQ(r.samples.size(), 1u);  // t = 0 only: the next sample was due at 10 ms
+  // The process goes on: the same scene runs to its end afterwards.
+  const RunResult again = run("planar_arm_mujoco.yaml", {"duration=1.0"});
+  EXPECT_TRUE(again.summary.failure.empty()) << again.summary.failure;
+  EXPECT_EQ(again.samples.size(), 101u);
+}
+
 TEST(MujocoScenes, BadEngineScenesAreRefusedWithTheirReason) {
   auto error_of = [](const std::vector<std::string>& sets) -> std::string {
     try {
@@ -237,6 +260,14 @@ TEST(MujocoScenes, BadEngineScenesAreRefusedWithTheirReason) {
   EXPECT_NE(error_of({"plant.timestep=3.0e-4"}).find("whole number of engine steps"), std::string::npos);
   EXPECT_NE(error_of({"plant.integrator=implicitfast"}).find("unknown integrator"), std::string::npos);
   EXPECT_NE(error_of({"plant.masses=[1, 1, 1]"}).find("unknown key"), std::string::npos);
+  EXPECT_NE(error_of({"plant.coordinates=[shoulder, elbow, elbow]"}).find("duplicate coordinate"), std::string::npos);
+  // The model class itself refuses a joint named twice (the other would get no force).
+  try {
+    MujocoModel twice(spec(kModels + "/arm3.xml", {}), {"shoulder", "shoulder", "wrist"});
+    ADD_FAILURE() << "a joint named twice was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("named twice"), std::string::npos) << e.what();
+  }
   // A program built without the engine says so.
   try {
     run_scene(load_scene(kScenes + "/planar_arm_mujoco.yaml"));

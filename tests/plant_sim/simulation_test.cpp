@@ -109,6 +109,7 @@ TEST(Simulation, EveryIntegratorReachesTheTrackingAccuracy) {
     double bound;
   };
   const Case cases[] = {{{"integrator.method=rkf78", "integrator.tolerance=1e-10"}, 1e-9},
+                        {{"integrator.method=bulirsch_stoer", "integrator.tolerance=1e-10"}, 1e-9},
                         {{"integrator.method=rk4", "integrator.step=1e-3"}, 1e-9}};
   for (const Case& c : cases) {
     const Scene s = load_scene(kScenes + "/duffing_alpha4.yaml", c.sets);
@@ -116,6 +117,22 @@ TEST(Simulation, EveryIntegratorReachesTheTrackingAccuracy) {
     EXPECT_EQ(r.samples.size(), 1001u);
     EXPECT_LE(r.summary.max_tracking_error, c.bound) << c.sets[0];
     EXPECT_NEAR(r.samples.back().t, 10.0, 1e-12);
+  }
+}
+
+// With sparse output no step is cut by the output grid: each adaptive method's cost follows its
+// tolerance, and the tighter run is the more accurate one against the minimal-coordinate model.
+TEST(Simulation, AdaptiveCostFollowsTheTolerance) {
+  for (const char* method : {"dopri5", "rkf78", "bulirsch_stoer"}) {
+    auto run_at = [&](const char* tolerance) {
+      return run_scene(load_scene(kScenes + "/duffing_alpha4.yaml",
+                                  {std::string("integrator.method=") + method,
+                                   std::string("integrator.tolerance=") + tolerance, "output_period=1.0"}));
+    };
+    const RunResult loose = run_at("1e-6"), tight = run_at("1e-12");
+    EXPECT_LT(loose.summary.rhs_evaluations, tight.summary.rhs_evaluations) << method;
+    EXPECT_LT(tight.summary.max_tracking_error, loose.summary.max_tracking_error) << method;
+    EXPECT_LT(tight.summary.max_tracking_error, 1e-9) << method;
   }
 }
 
@@ -249,7 +266,7 @@ TEST(RunGuards, DivergingPlantStopsWithItsReason) {
 }
 
 TEST(RunGuards, OverflowingForcesStopInsteadOfWritingNaN) {
-  for (const char* method : {"dopri5", "rkf78", "rk4"}) {
+  for (const char* method : {"dopri5", "rkf78", "bulirsch_stoer", "rk4"}) {
     const Scene s = load_scene(kScenes + "/duffing_alpha4.yaml",
                                {"plant.effects.0.stiffness=1e307", std::string("integrator.method=") + method,
                                 "integrator.step=1e-3"});

@@ -33,13 +33,17 @@ std::string g(double v) {
 }
 
 // The warnings with which mj_step resets the state to qpos0 (or computes from a singular M).
+// And those with which it drops contacts or constraint rows (nconmax, njmax full) and goes on
+// with other physics than the scene's.
 constexpr struct {
   int index;
   const char* what;
 } kResetWarnings[] = {{mjWARN_BADQPOS, "a bad number in qpos"},
                       {mjWARN_BADQVEL, "a bad number in qvel"},
                       {mjWARN_BADQACC, "a bad number or an acceleration above 1e10 in qacc"},
-                      {mjWARN_INERTIA, "a (near) singular mass matrix"}};
+                      {mjWARN_INERTIA, "a (near) singular mass matrix"},
+                      {mjWARN_CONTACTFULL, "a full contact list (raise the model's nconmax)"},
+                      {mjWARN_CNSTRFULL, "a full constraint list (raise the model's njmax)"}};
 
 }  // namespace
 
@@ -52,17 +56,34 @@ MujocoModel::MujocoModel(const EngineSpec& spec, const std::vector<std::string>&
     throw SceneError(spec.model_path + ": " + e.what());
   }
   if (!m_) throw SceneError(spec.model_path + ": MuJoCo cannot load it: " + error);
-  auto fail = [&](const std::string& why) {
-    mj_deleteModel(m_);
-    m_ = nullptr;
-    throw SceneError(spec.model_path + ": " + why);
-  };
+  try {
+    configure(spec, joints);
+  } catch (const std::exception& e) {  // a model that does not fit, or an mju_error while setting up
+    release();
+    if (dynamic_cast<const SceneError*>(&e) != nullptr) throw;
+    throw SceneError(spec.model_path + ": " + e.what());
+  }
+}
+
+void MujocoModel::release() noexcept {
+  if (d_) mj_deleteData(d_);
+  if (m_) mj_deleteModel(m_);
+  d_ = nullptr;
+  m_ = nullptr;
+}
+
+void MujocoModel::configure(const EngineSpec& spec, const std::vector<std::string>& joints) {
+  auto fail = [&](const std::string& why) { throw SceneError(spec.model_path + ": " + why); };
   // The coordinates: one hinge or slide joint each, covering every degree of freedom once.
   for (const std::string& name : joints) {
     const int j = mj_name2id(m_, mjOBJ_JOINT, name.c_str());
     if (j < 0) fail("has no joint named '" + name + "' (the scene's plant.coordinates are the model's joints)");
     if (m_->jnt_type[j] != mjJNT_HINGE && m_->jnt_type[j] != mjJNT_SLIDE)
       fail("joint '" + name + "' is not a hinge or a slide (a coordinate is one scalar joint)");
+    if (std::find(dof_index_.begin(), dof_index_.end(), m_->jnt_dofadr[j]) != dof_index_.end())
+      fail("joint '" + name + "' is named twice");
+    if (m_->qpos0[m_->jnt_qposadr[j]] != 0)
+      fail("joint '" + name + "' has a nonzero reference position (ref): its angle would not be the controller's");
     qpos_index_.push_back(m_->jnt_qposadr[j]);
     dof_index_.push_back(m_->jnt_dofadr[j]);
   }
@@ -101,21 +122,17 @@ MujocoModel::MujocoModel(const EngineSpec& spec, const std::vector<std::string>&
   m_->opt.timestep = spec.timestep;
   integrator_ = spec.integrator;
   m_->opt.integrator = spec.integrator == "euler" ? mjINT_EULER : spec.integrator == "implicit" ? mjINT_IMPLICIT : mjINT_RK4;
-  try {
-    d_ = mj_makeData(m_);
-  } catch (const std::exception& e) {
-    fail(e.what());
-  }
+  d_ = mj_makeData(m_);
   if (!d_) fail("MuJoCo cannot allocate its data");
+  // The constants the compiler derived from the fields zeroed above (the armature enters
+  // dof_invweight0 and meaninertia, which scale constraint impedance and solver tolerance).
+  mj_setConst(m_, d_);
   std::vector<double> zero(joints.size(), 0.0);
   for (std::size_t i = 0; i < joints.size(); ++i) zero[i] = d_->qpos[qpos_index_[i]];
   set_state(zero.data(), std::vector<double>(joints.size(), 0.0).data());
 }
 
-MujocoModel::~MujocoModel() {
-  if (d_) mj_deleteData(d_);
-  if (m_) mj_deleteModel(m_);
-}
+MujocoModel::~MujocoModel() { release(); }
 
 void MujocoModel::set_state(const double* q, const double* qd, double t) {
   for (int i = 0; i < dof(); ++i) {
@@ -154,16 +171,21 @@ std::string MujocoModel::step(const double* u) {
   for (int i = 0; i < dof(); ++i) d_->qfrc_applied[dof_index_[static_cast<std::size_t>(i)]] = u[i];
   int before[std::size(kResetWarnings)];
   for (std::size_t k = 0; k < std::size(kResetWarnings); ++k) before[k] = d_->warning[kResetWarnings[k].index].number;
+  if (!failure_.empty()) return failure_;
   const double t = d_->time;
+  const auto stack = d_->pstack;
   try {
     mj_step(m_, d_);
   } catch (const std::exception& e) {
-    return std::string(e.what()) + " (at t = " + g(t) + " s)";
+    // The step stopped half-way: its stack mark is restored, and the model steps no more.
+    d_->pstack = stack;
+    failure_ = std::string(e.what()) + " (in the step from t = " + g(t) + " s)";
+    return failure_;
   }
   for (std::size_t k = 0; k < std::size(kResetWarnings); ++k)
     if (d_->warning[kResetWarnings[k].index].number != before[k])
       return "MuJoCo met " + std::string(kResetWarnings[k].what) + " in the step from t = " + g(t) +
-             " s (it resets the state and goes on; the run cannot)";
+             " s (it resets the state or drops constraints and goes on; the run cannot)";
   for (int i = 0; i < m_->nq; ++i)
     if (!std::isfinite(d_->qpos[i])) return "MuJoCo's qpos left the finite range at t = " + g(d_->time) + " s";
   for (int i = 0; i < m_->nv; ++i)

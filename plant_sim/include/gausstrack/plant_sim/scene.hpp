@@ -102,7 +102,10 @@ inline constexpr const char* kMujocoEffects[] = {"gravity", "damping", "springs"
                                                  "frictionloss", "limits", "contact", "equality"};
 
 enum class ControlMode : std::uint8_t { kContinuous, kSampled };
-enum class Method : std::uint8_t { kRk4, kDopri5, kRkf78 };
+/// The plant's integrator: fixed-step RK4; Dormand-Prince 5(4) with dense output; Fehlberg 7(8)
+/// (steps end on sample times: odeint has no dense output for it); Bulirsch-Stoer with dense
+/// output (high accuracy, offline: it allocates as it steps).
+enum class Method : std::uint8_t { kRk4, kDopri5, kRkf78, kBulirschStoer };
 
 struct Scene {
   std::string file;

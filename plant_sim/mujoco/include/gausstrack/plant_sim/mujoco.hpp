@@ -40,7 +40,8 @@ class MujocoModel {
   void bias_minus_passive(double* r) const;
 
   /// One mj_step under generalized force u: an empty string, or why the state cannot be trusted
-  /// (MuJoCo warned of a bad qpos, qvel or qacc and reset its state, or an mju_error).
+  /// (MuJoCo warned of a bad qpos, qvel or qacc and reset its state, dropped contacts or
+  /// constraint rows, or called mju_error; after an mju_error the model steps no more).
   std::string step(const double* u);
 
   std::string description() const;
@@ -48,10 +49,14 @@ class MujocoModel {
   mjData_* data() noexcept { return d_; }
 
  private:
+  void configure(const EngineSpec& spec, const std::vector<std::string>& joints);
+  void release() noexcept;
+
   mjModel_* m_ = nullptr;
   mjData_* d_ = nullptr;
   std::vector<int> qpos_index_, dof_index_;
   std::string integrator_;
+  std::string failure_;
 };
 
 /// The factory for plant.engine: mujoco (RunOptions::engines, plant_main's engines).
