@@ -37,12 +37,12 @@ CASES = [
     ("jitter 2 +- 1.5 ms", ["--delay-ms", "2", "--jitter-ms", "1.5"], None,
      "late and out-of-order answers counted, error < 3e-2, no watchdog trip", dict(max_error=3e-2, trips=(0, 0))),
     ("loss 1 %", ["--loss", "0.01"], None,
-     "2 % more periods without a fresh command than with no fault (a state or its answer lost), error < 1e-2",
+     "2 % of periods lose their command (a state or its answer lost) beyond those the loaded machine answers late, error < 1e-2",
      dict(max_error=1e-2, trips=(0, 0), loss=0.01)),
-    ("loss 10 %", ["--loss", "0.10"], None, "19 % more periods without a fresh command, error < 2e-2",
+    ("loss 10 %", ["--loss", "0.10"], None, "19 % of periods lose their command beyond the late ones, error < 2e-2",
      dict(max_error=2e-2, trips=(0, 0), loss=0.10)),
     ("loss 50 %", ["--loss", "0.50"], None,
-     "75 % more periods without a fresh command, held forces keep the error < 5e-2, no watchdog trip",
+     "75 % of periods lose their command beyond the late ones, held forces keep the error < 5e-2, no watchdog trip",
      dict(max_error=5e-2, trips=(0, 0), loss=0.50)),
     ("duplication 10 %", ["--duplicate", "0.10"], None,
      "duplicate states answered again with the same command, duplicate commands refused, error < 1e-2",
@@ -165,7 +165,7 @@ def run_case(idx, name, relay_args, crash, bin_dir, test_bin, scene, out):
     return s, errors, ctrl, recovery
 
 
-def check(expect, s, errors, ctrl, baseline_missing):
+def check(expect, s, errors, ctrl):
     problems = []
     periods = s["states_published"]
     if s["commands_applied"] + s["commands_missing"] != periods:
@@ -181,10 +181,13 @@ def check(expect, s, errors, ctrl, baseline_missing):
         problems.append(f"final error {errors[-1]:.3g} >= {expect['final_error']:g}")
     if "loss" in expect:
         # A period misses its command when its state or the answer is lost: 1 - (1 - p)^2, on top
-        # of what the same machine misses with no fault (measured first, in the same campaign).
+        # of the periods a loaded machine misses by itself. Those are counted in the same run (an
+        # answer that came late, a plant that woke past its deadline), not taken from another run:
+        # the load on a shared machine changes from one case to the next.
         lost = 1 - (1 - expect["loss"]) ** 2
         frac = s["commands_missing"] / periods
-        lo, hi = max(0.0, lost - 0.03), min(1.0, baseline_missing + lost + 0.05)
+        own = max(s["commands_late"], s["deadline_misses"]) / periods
+        lo, hi = max(0.0, lost - 0.03), min(1.0, own + lost + 0.05)
         if not lo <= frac <= hi:
             problems.append(f"missing fraction {frac:.3f} not in [{lo:.3f}, {hi:.3f}]")
     if "rejected_min" in expect:
@@ -202,12 +205,9 @@ def main(bin_dir, test_bin, scene, out):
              "(plant / controller) | watchdog trips | deadline misses | recovery | met |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     failures = 0
-    baseline_missing = 0.0
     for idx, (name, relay_args, crash, text, expect) in enumerate(CASES):
         s, errors, ctrl, recovery = run_case(idx, name, relay_args, crash, bin_dir, test_bin, scene, out)
-        if idx == 0:
-            baseline_missing = s["commands_missing"] / s["states_published"]
-        problems = check(expect, s, errors, ctrl, baseline_missing)
+        problems = check(expect, s, errors, ctrl)
         failures += bool(problems)
         rec = "" if recovery is None else f"{recovery * 1e3:.0f} ms"
         crej = sum(c["messages_rejected"] for c in ctrl)
