@@ -1,6 +1,7 @@
 # Per-target compiler settings: warnings (errors under CI) and sanitizers.
 
 option(GAUSSTRACK_WERROR "Treat warnings as errors" "$ENV{CI}")
+option(GAUSSTRACK_NATIVE "Build the tests, benchmarks and tools for this machine's CPU (-march=native)" OFF)
 option(GAUSSTRACK_SANITIZE "Build tests and tools with address and undefined-behaviour sanitizers" OFF)
 
 function(gausstrack_set_warnings target)
@@ -42,4 +43,7 @@ endfunction()
 function(gausstrack_configure_target target)
   gausstrack_set_warnings(${target})
   gausstrack_enable_sanitizers(${target})
+  if(GAUSSTRACK_NATIVE)
+    target_compile_options(${target} PRIVATE -march=native)
+  endif()
 endfunction()

@@ -6,6 +6,7 @@
 // - an input holding NaN or Inf gets Status::kNonFiniteInput and all-zero outputs;
 // - finite input gives finite outputs, whatever the status; a failed status gives all zeros;
 // - a successful solve reports a rank in [0, P] and a condition estimate that is not NaN;
+// - solving the same input again (the kept factorization) gives the same status and answer;
 // - the controller's published force and its parts are finite, and within the force limit set.
 #include <Eigen/Core>
 
@@ -71,6 +72,11 @@ void solve_case(FuzzInput& in) {
     const typename Solver::VectorN extra = solver.force_for_rhs(g);
     GAUSSTRACK_FUZZ_CHECK(extra.allFinite());
   }
+  typename Solver::Solution again;
+  GAUSSTRACK_FUZZ_CHECK(solver.solve(A, f, Q, D, g, again) == status);
+  GAUSSTRACK_FUZZ_CHECK(again.constraint_force == out.constraint_force && again.acceleration == out.acceleration &&
+                        again.diagnostics.warnings == out.diagnostics.warnings &&
+                        again.diagnostics.rank == out.diagnostics.rank);
 }
 
 void controller_case(FuzzInput& in) {

@@ -21,6 +21,7 @@ void bench_duffing_closed_form(benchmark::State& state) {
 }
 
 const bool registered = [] {
+  benchmark::AddCustomContext("build_for_host_cpu", GAUSSTRACK_NATIVE_BUILD ? "yes (-march=native)" : "no (GAUSSTRACK_NATIVE=OFF)");
   benchmark::RegisterBenchmark("baseline/timer_overhead", bench_timer_overhead);
   register_model<Duffing>("duffing");
   benchmark::RegisterBenchmark("baseline/duffing_2x1/closed_form", bench_duffing_closed_form);

@@ -397,5 +397,126 @@ TEST(HardCases, FloatMatchesDouble) {
   }
 }
 
+
+// --- Reuse of the factorization, and the declared-diagonal mass matrix. ---
+
+template <int N, int P>
+void expect_identical(const ConstraintSolution<N, P>& a, const ConstraintSolution<N, P>& b) {
+  EXPECT_EQ(a.acceleration, b.acceleration);
+  EXPECT_EQ(a.constraint_force, b.constraint_force);
+  EXPECT_EQ(a.force_from_impressed, b.force_from_impressed);
+  EXPECT_EQ(a.force_from_rhs, b.force_from_rhs);
+  EXPECT_EQ(a.diagnostics.status, b.diagnostics.status);
+  EXPECT_EQ(a.diagnostics.warnings, b.diagnostics.warnings);
+  EXPECT_EQ(a.diagnostics.rank, b.diagnostics.rank);
+  EXPECT_EQ(a.diagnostics.strategy_used, b.diagnostics.strategy_used);
+  EXPECT_EQ(a.diagnostics.condition_estimate, b.diagnostics.condition_estimate);
+}
+
+// Expectation: a solver that kept its factorization from an earlier call answers bit for bit as a
+// fresh solver does, whether A, D or neither changed (by as little as one ulp in one entry), for
+// every strategy, and keeps reporting the factorization's diagnostics (here the fallback to the
+// SVD for nearly dependent rows).
+TEST(Reuse, KeptFactorizationAnswersAsAFreshSolver) {
+  RandomSource<double> rng(21);
+  for (InverseStrategy s : kStrategies) {
+    auto kept = solver_for<6, 3>(s, -1, 1e-6);
+    ConstraintSolution<6, 3> a, b;
+    for (int it = 0; it < 50; ++it) {
+      auto sys = rng.system<6, 3>();
+      if (it % 5 == 4) sys.D.row(2) = sys.D.row(1) + 1e-9 * rng.matrix<1, 6>();  // nearly dependent
+      for (int change = 0; change < 4; ++change) {
+        if (change == 1) sys.A(3, 2) = sys.A(2, 3) = std::nextafter(sys.A(2, 3), 10.0);
+        if (change == 2) sys.D(1, 4) = std::nextafter(sys.D(1, 4), -10.0);
+        if (change == 3) sys.A(5, 5) = std::nextafter(sys.A(5, 5), 10.0);  // the diagonal
+        sys.f = rng.matrix<6, 1>();
+        sys.Q = rng.matrix<6, 1>();
+        sys.g = rng.matrix<3, 1>();
+        auto fresh = solver_for<6, 3>(s, -1, 1e-6);
+        ASSERT_EQ(kept.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, a), Status::kOk);
+        ASSERT_EQ(fresh.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, b), Status::kOk);
+        expect_identical(a, b);
+        if (it % 5 == 4 && s == InverseStrategy::kCholeskyWithFallback) {
+          ASSERT_TRUE(a.diagnostics.has(warning::kFellBackToSvd)) << "iteration " << it << " change " << change;
+        }
+        ASSERT_FALSE(HasFailure()) << to_string(s) << " iteration " << it << " change " << change;
+      }
+    }
+  }
+}
+
+// Expectation: a failed call (NaN in A or D, A not positive definite) leaves nothing behind: the
+// next call with the earlier, good A and D answers as a fresh solver; and new options apply at
+// once (the kept factorization was the old strategy's).
+TEST(Reuse, FailuresAndNewOptionsDropTheKeptFactorization) {
+  RandomSource<double> rng(22);
+  const auto sys = rng.system<6, 3>();
+  ConstraintSolver<6, 3> kept;
+  ConstraintSolution<6, 3> a, b;
+  ASSERT_EQ(kept.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, a), Status::kOk);
+  auto bad_a = sys.A;
+  bad_a(1, 1) = -1;
+  EXPECT_EQ(kept.solve(bad_a, sys.f, sys.Q, sys.D, sys.g, a), Status::kMassMatrixNotPositiveDefinite);
+  auto nan_d = sys.D;
+  nan_d(2, 0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(kept.solve(sys.A, sys.f, sys.Q, nan_d, sys.g, a), Status::kNonFiniteInput);
+  EXPECT_EQ(a.diagnostics.non_finite_inputs, input::kConstraintMatrix);
+  ASSERT_EQ(kept.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, a), Status::kOk);
+  ConstraintSolver<6, 3> fresh;
+  ASSERT_EQ(fresh.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, b), Status::kOk);
+  expect_identical(a, b);
+
+  SolverOptions<double> svd;
+  svd.strategy = InverseStrategy::kSvd;
+  kept.set_options(svd);
+  ASSERT_EQ(kept.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, a), Status::kOk);
+  EXPECT_EQ(a.diagnostics.strategy_used, InverseStrategy::kSvd);
+  ConstraintSolver<6, 3> fresh_svd(svd);
+  ASSERT_EQ(fresh_svd.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, b), Status::kOk);
+  expect_identical(a, b);
+}
+
+// Expectation: a solver told the mass matrix is diagonal gives the dense solver's answer (to
+// rounding) for a diagonal A, in every strategy; it reads the diagonal alone; a non-positive or
+// non-finite diagonal entry fails as it does for the dense solver.
+TEST(DiagonalMass, AgreesWithTheDenseSolver) {
+  RandomSource<double> rng(23);
+  for (InverseStrategy s : kStrategies) {
+    SolverOptions<double> o;
+    o.strategy = s;
+    ConstraintSolver<6, 3> dense(o);
+    ConstraintSolver<6, 3, double, MassMatrix::kDiagonal> diagonal(o);
+    ConstraintSolution<6, 3> a, b;
+    for (int it = 0; it < 100; ++it) {
+      auto sys = rng.system<6, 3>();
+      Eigen::Matrix<double, 6, 1> m;
+      for (int i = 0; i < 6; ++i) m(i) = std::pow(10.0, rng.uniform(-2, 2));
+      sys.A = m.asDiagonal();
+      ASSERT_EQ(dense.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, a), Status::kOk);
+      ASSERT_EQ(diagonal.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, b), Status::kOk);
+      const double scale = 1 + a.constraint_force.norm();
+      ASSERT_LT((a.constraint_force - b.constraint_force).norm(), 1e-10 * scale) << to_string(s);
+      ASSERT_LT((a.force_from_impressed - b.force_from_impressed).norm(), 1e-10 * scale) << to_string(s);
+      ASSERT_LT((a.force_from_rhs - b.force_from_rhs).norm(), 1e-10 * scale) << to_string(s);
+      ASSERT_LT((a.acceleration - b.acceleration).norm(), 1e-10 * (1 + a.acceleration.norm())) << to_string(s);
+      ASSERT_EQ(a.diagnostics.rank, b.diagnostics.rank);
+      // Off-diagonal entries are not read.
+      Eigen::Matrix<double, 6, 6> with_junk = sys.A;
+      with_junk(0, 3) = std::numeric_limits<double>::quiet_NaN();
+      ConstraintSolution<6, 3> c;
+      ASSERT_EQ(diagonal.solve(with_junk, sys.f, sys.Q, sys.D, sys.g, c), Status::kOk);
+      ASSERT_EQ(c.constraint_force, b.constraint_force);
+    }
+    Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Identity();
+    const auto sys = rng.system<6, 3>();
+    A(4, 4) = 0;
+    EXPECT_EQ(diagonal.solve(A, sys.f, sys.Q, sys.D, sys.g, b), Status::kMassMatrixNotPositiveDefinite);
+    expect_all_zero(b);
+    A(4, 4) = std::numeric_limits<double>::infinity();
+    EXPECT_EQ(diagonal.solve(A, sys.f, sys.Q, sys.D, sys.g, b), Status::kNonFiniteInput);
+    EXPECT_EQ(b.diagnostics.non_finite_inputs, input::kMassMatrix);
+  }
+}
+
 }  // namespace
 }  // namespace gausstrack::test

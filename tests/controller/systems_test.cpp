@@ -214,6 +214,24 @@ TEST(ModelCheck, NamesWhatIsWrong) {
   std::printf("%s\n", g_wrong.text.c_str());
 }
 
+// A model that declares its mass matrix diagonal but writes an off-diagonal entry is caught: the
+// solver would read the diagonal alone and silently drop the coupling.
+struct CoupledButDeclaredDiagonal : systems::CoupledDuffing<double> {
+  void evaluate(const Vector& q, const Vector& qd, double t, Terms& terms) const noexcept {
+    systems::CoupledDuffing<double>::evaluate(q, qd, t, terms);
+    terms.mass_matrix(0, 1) = terms.mass_matrix(1, 0) = 0.25;
+  }
+};
+TEST(ModelCheck, DeclaredDiagonalMassMatrixMustBeDiagonal) {
+  const Eigen::Vector2d q(0.3, -0.2), qd(0.1, 0.4), qdd(-0.5, 0.2);
+  const auto bad = check_model(CoupledButDeclaredDiagonal{}, q, qd, qdd, 0.7);
+  EXPECT_FALSE(bad.ok());
+  EXPECT_NE(bad.text.find("declared diagonal"), std::string::npos) << bad.text;
+  const auto good = check_model(systems::CoupledDuffing<double>{}, q, qd, qdd, 0.7);
+  EXPECT_TRUE(good.ok()) << good.text;
+  EXPECT_NE(good.text.find("ok    A diagonal, as declared"), std::string::npos) << good.text;
+}
+
 // A hand-written row that gives neither e nor e' is reported as unchecked, not passed silently.
 struct Bare {
   using Scalar = double;

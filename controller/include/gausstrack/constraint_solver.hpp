@@ -18,6 +18,13 @@
 //   A (I - X) D^- g       = L B^+ g                                 "force_from_rhs"
 // (They are unique whatever g-inverses eq. 32 uses, since the constrained motion is unique.)
 //
+// Reuse. The factorization (of A, and of B with the chosen strategy) depends on A and D alone; a
+// solve whose A and D equal the previous solve's bit for bit keeps it, and so do its diagnostics
+// (rank, singular values, fallback). A constant mass matrix is therefore factored once, and a
+// constant A and D (a joint-space trajectory on a chain) leave only products with the factors.
+// A mass matrix declared diagonal (MassMatrix::kDiagonal) is read on its diagonal only and
+// "factored" by square roots: L = diag(sqrt(A_ii)).
+//
 // Strategies for y = B^+ r (all allocation-free for fixed sizes):
 // - kCholeskyWithFallback (default): normal equations, y = B^T (B B^T)^-1 r with B B^T = D A^-1 D^T
 //   factored by LLT. Exact Moore-Penrose answer when rank(D) = P. Its rounding error grows like
@@ -45,6 +52,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "gausstrack/mass_matrix.hpp"
 #include "gausstrack/status.hpp"
 
 namespace gausstrack {
@@ -82,7 +90,8 @@ struct SolverOptions {
   Scalar fallback_rcond = std::numeric_limits<Scalar>::digits > 24 ? Scalar(1e-6) : Scalar(1e-3);
   /// lambda of kDampedLeastSquares, in the units of the singular values of D A^(-1/2).
   Scalar damping = Scalar(0);
-  /// warning::kConstraintsNotMet when ||D q'' - g|| > residual_tolerance (||g|| + ||D||_F ||q''||).
+  /// warning::kConstraintsNotMet when
+  /// ||D q'' - g|| > residual_tolerance sqrt(||g||^2 + ||D||_F^2 ||q''||^2).
   Scalar residual_tolerance = std::sqrt(kEps);
   /// warning::kIllConditioned when the condition estimate of D A^(-1/2) exceeds this.
   Scalar warn_condition = Scalar(1) / std::sqrt(kEps);
@@ -92,6 +101,9 @@ struct SolverOptions {
   /// the rows is not enforced, which bounds the force by ||L|| ||g - D a|| / min_singular_value.
   /// 0 (the default) relies on the relative rank tolerance alone.
   Scalar min_singular_value = Scalar(0);
+  /// Keep the factorization while A and D are unchanged bit for bit (see the file comment). Only
+  /// the cost changes: false factors on every call, as a configuration-dependent A and D do.
+  bool reuse_factorization = true;
 };
 
 /// Diagnostics of one solve. Singular values are those of B = D L^-T, which equal those of
@@ -125,7 +137,7 @@ struct ConstraintSolution {
 
 /// Solver for eq. (30) and eq. (32) with N coordinates and P constraint rows. Owns its workspace;
 /// `solve` never allocates and never throws.
-template <int N, int P, typename Scalar = double>
+template <int N, int P, typename Scalar = double, MassMatrix kMass = MassMatrix::kDense>
 class ConstraintSolver {
   static_assert(N >= 1 && P >= 1, "ConstraintSolver needs at least one coordinate and one row");
   static_assert(P <= N, "more constraint rows than coordinates are necessarily redundant: "
@@ -150,6 +162,7 @@ class ConstraintSolver {
   }
 
   void set_options(const Options& options) noexcept {
+    factored_ = false;
     options_ = options;
     if (!(options_.rank_tolerance > Scalar(0))) {
       options_.rank_tolerance = Scalar(std::max(N, P)) * std::numeric_limits<Scalar>::epsilon();
@@ -170,52 +183,64 @@ class ConstraintSolver {
     out.diagnostics = SolveDiagnostics<Scalar>{};
     SolveDiagnostics<Scalar>& diag = out.diagnostics;
 
+    // A and D equal to the factored ones are finite and need no new factorization.
+    const bool same_mass = factored_ && options_.reuse_factorization && mass_equals(A);
+    const bool same_factors = same_mass && D == d_key_;
     std::uint32_t bad = 0;
-    if (!A.allFinite()) bad |= input::kMassMatrix;
+    if (!same_mass && !mass_finite(A)) bad |= input::kMassMatrix;
     if (!f.allFinite()) bad |= input::kNonlinearForce;
     if (!Q.allFinite()) bad |= input::kAppliedForce;
-    if (!D.allFinite()) bad |= input::kConstraintMatrix;
+    if (!same_factors && !D.allFinite()) bad |= input::kConstraintMatrix;
     if (!g.allFinite()) bad |= input::kConstraintRhs;
     if (bad != 0) {
       diag.non_finite_inputs = bad;
       return fail(out, Status::kNonFiniteInput);
     }
 
-    mass_llt_.compute(A);
-    if (mass_llt_.info() != Eigen::Success) return fail(out, Status::kMassMatrixNotPositiveDefinite);
+    if (!same_factors) {
+      factored_ = false;
+      if (!same_mass && !factor_mass(A)) return fail(out, Status::kMassMatrixNotPositiveDefinite);
+      d_key_ = D;
+      d_norm2_ = D.squaredNorm();
+      set_bt(D);  // B^T = L^-1 D^T
+      factor_diagnostics_ = SolveDiagnostics<Scalar>{};
+      factorize(factor_diagnostics_);
+      factored_ = true;
+    }
+    diag = factor_diagnostics_;
 
-    // a = A^-1 (Q - f);  B^T = L^-1 D^T.
-    out.unconstrained_acceleration = mass_llt_.solve(Q - f);
-    bt_ = D.transpose();
-    mass_llt_.matrixL().solveInPlace(bt_);
-
-    // Right sides of the two eq. (32) terms, solved together.
+    // a = A^-1 (Q - f); right sides of the two eq. (32) terms, solved together.
+    out.unconstrained_acceleration = Q - f;
+    solve_mass_in_place(out.unconstrained_acceleration);
     Eigen::Matrix<Scalar, P, 2> rhs;
     rhs.col(0).noalias() = -(D * out.unconstrained_acceleration);
     rhs.col(1) = g;
-    factorize(diag);
     Eigen::Matrix<Scalar, N, 2> y;
     apply_pseudo_inverse(rhs, y);
 
-    out.force_from_impressed.noalias() = mass_llt_.matrixL() * y.col(0);
-    out.force_from_rhs.noalias() = mass_llt_.matrixL() * y.col(1);
-    out.constraint_force = out.force_from_impressed + out.force_from_rhs;
     VectorN dq = y.col(0) + y.col(1);
-    mass_llt_.matrixU().solveInPlace(dq);  // L^-T y
+    apply_l_in_place(y);  // L y
+    out.force_from_impressed = y.col(0);
+    out.force_from_rhs = y.col(1);
+    out.constraint_force = out.force_from_impressed + out.force_from_rhs;
+    solve_lt_in_place(dq);  // L^-T y
     out.acceleration = out.unconstrained_acceleration + dq;
 
-    if (!out.acceleration.allFinite() || !out.constraint_force.allFinite() ||
-        !out.force_from_impressed.allFinite() || !out.force_from_rhs.allFinite()) {
+    // Both parts are finite when their sum is (an Inf or NaN part makes the sum Inf or NaN).
+    if (!out.acceleration.allFinite() || !out.constraint_force.allFinite()) {
       return fail(out, Status::kNonFiniteResult);
     }
 
-    diag.residual_norm = (D * out.acceleration - g).norm();
-    const Scalar scale = g.norm() + D.norm() * out.acceleration.norm();
-    if (!std::isfinite(diag.residual_norm)) {
+    // Squared norms: one square root (the reported residual), none for the scale.
+    const Scalar residual2 = (D * out.acceleration - g).squaredNorm();
+    diag.residual_norm = std::sqrt(residual2);
+    const Scalar scale2 = g.squaredNorm() + d_norm2_ * out.acceleration.squaredNorm();
+    const Scalar tolerance2 = options_.residual_tolerance * options_.residual_tolerance;
+    if (!std::isfinite(residual2)) {
       // D q'' overflowed (entries near the range limit): the answer cannot be verified.
       diag.residual_norm = std::numeric_limits<Scalar>::infinity();
       diag.warnings |= warning::kConstraintsNotMet;
-    } else if (diag.residual_norm > options_.residual_tolerance * scale) {
+    } else if (residual2 > tolerance2 * scale2) {
       diag.warnings |= warning::kConstraintsNotMet;
     }
     if (diag.rank < P) diag.warnings |= warning::kRankDeficient;
@@ -230,10 +255,60 @@ class ConstraintSolver {
     if (!ready_) return VectorN::Zero();
     VectorN y;
     apply_pseudo_inverse(rhs, y);
-    return mass_llt_.matrixL() * y;
+    apply_l_in_place(y);
+    return y;
   }
 
  private:
+  // --- The mass matrix's factor L (A = L L^T), dense or diagonal. ---
+  template <typename DA>
+  bool mass_equals(const Eigen::MatrixBase<DA>& A) const noexcept {
+    if constexpr (kMass == MassMatrix::kDiagonal) return A.diagonal() == mass_diagonal_;
+    else return A == mass_key_;
+  }
+  template <typename DA>
+  static bool mass_finite(const Eigen::MatrixBase<DA>& A) noexcept {
+    if constexpr (kMass == MassMatrix::kDiagonal) return A.diagonal().allFinite();
+    else return A.allFinite();
+  }
+  template <typename DA>
+  bool factor_mass(const Eigen::MatrixBase<DA>& A) noexcept {
+    if constexpr (kMass == MassMatrix::kDiagonal) {
+      mass_diagonal_ = A.diagonal();
+      if (!(mass_diagonal_.array() > Scalar(0)).all()) return false;
+      sqrt_mass_ = mass_diagonal_.cwiseSqrt();
+      inverse_sqrt_mass_ = sqrt_mass_.cwiseInverse();
+      inverse_mass_ = mass_diagonal_.cwiseInverse();
+      return true;
+    } else {
+      mass_key_ = A;
+      mass_llt_.compute(mass_key_);
+      return mass_llt_.info() == Eigen::Success;
+    }
+  }
+  template <typename DD>
+  void set_bt(const Eigen::MatrixBase<DD>& D) noexcept {
+    if constexpr (kMass == MassMatrix::kDiagonal) {
+      bt_.noalias() = inverse_sqrt_mass_.asDiagonal() * D.transpose();
+    } else {
+      bt_ = D.transpose();
+      mass_llt_.matrixL().solveInPlace(bt_);
+    }
+  }
+  void solve_mass_in_place(VectorN& x) const noexcept {  // x = A^-1 x
+    if constexpr (kMass == MassMatrix::kDiagonal) x.array() *= inverse_mass_.array();
+    else mass_llt_.solveInPlace(x);
+  }
+  template <typename Derived>
+  void apply_l_in_place(Eigen::MatrixBase<Derived>& x) const noexcept {  // x = L x
+    if constexpr (kMass == MassMatrix::kDiagonal) x = sqrt_mass_.asDiagonal() * x;
+    else x = mass_llt_.matrixL() * x;
+  }
+  void solve_lt_in_place(VectorN& x) const noexcept {  // x = L^-T x
+    if constexpr (kMass == MassMatrix::kDiagonal) x.array() *= inverse_sqrt_mass_.array();
+    else mass_llt_.matrixU().solveInPlace(x);
+  }
+
   Status fail(Solution& out, Status status) noexcept {
     const VectorN zero = VectorN::Zero();
     out.acceleration = zero;
@@ -301,23 +376,38 @@ class ConstraintSolver {
   // LLT of B B^T + lambda2 I = D A^-1 D^T + lambda2 I. Returns false when it is not usable.
   bool factorize_normal_equations(Scalar lambda2, bool require_well_conditioned,
                                   SolveDiagnostics<Scalar>& diag) noexcept {
-    MatrixPP gram;
-    gram.noalias() = bt_.transpose() * bt_;
-    gram.diagonal().array() += lambda2;
-    gram_llt_.compute(gram);
-    if (gram_llt_.info() != Eigen::Success) return false;
-    const Scalar rcond = gram_llt_.rcond();
-    if (require_well_conditioned && !(rcond >= options_.fallback_rcond)) return false;
-    if (!(rcond > Scalar(0))) return false;
-    used_ = options_.strategy;
-    rank_ = P;
-    const auto d = gram_llt_.matrixLLT().diagonal();
-    diag.strategy_used = used_;
-    diag.rank = P;
-    diag.sigma_max = d.maxCoeff();
-    diag.sigma_min_kept = d.minCoeff();
-    diag.condition_estimate = Scalar(1) / std::sqrt(rcond);
-    return true;
+    if constexpr (P == 1) {
+      // One row: B B^T is the scalar |b|^2, exactly conditioned; only its size can fail.
+      const Scalar gram = bt_.squaredNorm() + lambda2;
+      if (!(gram > Scalar(0)) || !std::isfinite(gram)) return false;
+      inverse_gram_ = Scalar(1) / gram;
+      used_ = options_.strategy;
+      rank_ = 1;
+      diag.strategy_used = used_;
+      diag.rank = 1;
+      diag.sigma_max = diag.sigma_min_kept = std::sqrt(gram);
+      diag.condition_estimate = Scalar(1);
+      (void)require_well_conditioned;
+      return true;
+    } else {
+      MatrixPP gram;
+      gram.noalias() = bt_.transpose() * bt_;
+      gram.diagonal().array() += lambda2;
+      gram_llt_.compute(gram);
+      if (gram_llt_.info() != Eigen::Success) return false;
+      const Scalar rcond = gram_llt_.rcond();
+      if (require_well_conditioned && !(rcond >= options_.fallback_rcond)) return false;
+      if (!(rcond > Scalar(0))) return false;
+      used_ = options_.strategy;
+      rank_ = P;
+      const auto d = gram_llt_.matrixLLT().diagonal();
+      diag.strategy_used = used_;
+      diag.rank = P;
+      diag.sigma_max = d.maxCoeff();
+      diag.sigma_min_kept = d.minCoeff();
+      diag.condition_estimate = Scalar(1) / std::sqrt(rcond);
+      return true;
+    }
   }
 
   void factorize_svd(SolveDiagnostics<Scalar>& diag) noexcept {
@@ -380,9 +470,13 @@ class ConstraintSolver {
     switch (used_) {
       case InverseStrategy::kCholeskyWithFallback:
       case InverseStrategy::kDampedLeastSquares: {
-        Eigen::Matrix<Scalar, P, K> w = r;
-        gram_llt_.solveInPlace(w);
-        y.noalias() = bt_ * w;
+        if constexpr (P == 1) {
+          y.noalias() = bt_ * (r * inverse_gram_);
+        } else {
+          Eigen::Matrix<Scalar, P, K> w = r;
+          gram_llt_.solveInPlace(w);
+          y.noalias() = bt_ * w;
+        }
         return;
       }
       case InverseStrategy::kSvd: {
@@ -442,6 +536,15 @@ class ConstraintSolver {
   }
 
   Options options_;
+  // The factorization and what it was computed from (valid while factored_).
+  bool factored_ = false;
+  MatrixNN mass_key_ = MatrixNN::Zero();   // A (dense)
+  VectorN mass_diagonal_ = VectorN::Zero();  // A's diagonal (diagonal)
+  VectorN sqrt_mass_ = VectorN::Zero(), inverse_sqrt_mass_ = VectorN::Zero(), inverse_mass_ = VectorN::Zero();
+  MatrixPN d_key_ = MatrixPN::Zero();       // D
+  Scalar d_norm2_ = Scalar(0);              // ||D||_F^2
+  Scalar inverse_gram_ = Scalar(0);         // 1 / (B B^T + lambda^2) when P = 1
+  SolveDiagnostics<Scalar> factor_diagnostics_;  // what factorize reported
   Eigen::LLT<MatrixNN> mass_llt_;
   MatrixNP bt_ = MatrixNP::Zero();  // B^T = L^-1 D^T
   MatrixPN b_ = MatrixPN::Zero();   // B, for the COD

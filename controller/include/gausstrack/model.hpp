@@ -31,13 +31,16 @@
 // decides which of eq. (32)'s two terms a force appears in.
 //
 // Entries a model's evaluate never writes keep their previous value; ModelTerms starts at zero, so
-// a model with a diagonal A may write the diagonal only.
+// a model with a diagonal A may write the diagonal only. Such a model should also declare
+//   static constexpr MassMatrix kMassMatrix = MassMatrix::kDiagonal;
+// so that the solver reads and factors the diagonal alone (mass_matrix.hpp).
 #pragma once
 
 #include <Eigen/Core>
 #include <concepts>
 
 #include "gausstrack/jet.hpp"
+#include "gausstrack/mass_matrix.hpp"
 
 namespace gausstrack {
 
@@ -60,6 +63,11 @@ constexpr int holonomic_rows() {
   else return 0;
 }
 template <typename M>
+constexpr MassMatrix mass_matrix_kind() {
+  if constexpr (requires { M::kMassMatrix; }) return M::kMassMatrix;
+  else return MassMatrix::kDense;
+}
+template <typename M>
 constexpr int nonholonomic_rows() {
   if constexpr (requires { M::kNonholonomicRows; }) return M::kNonholonomicRows;
   else return 0;
@@ -75,6 +83,10 @@ struct RowLayout {
   static constexpr int kFirstNonholonomic = kHolonomic;
   static constexpr int kFirstAcceleration = kHolonomic + kNonholonomic;
 };
+
+/// How model M's mass matrix is stored (its kMassMatrix, or kDense when it declares none).
+template <typename M>
+inline constexpr MassMatrix kMassMatrixOf = detail::mass_matrix_kind<M>();
 
 template <typename M>
 using TermsOf = ModelTerms<M::kDof, M::kConstraints, typename M::Scalar>;

@@ -106,6 +106,18 @@ ModelCheckReport check_model(const M& m, const Eigen::Matrix<typename M::Scalar,
   } else {
     out += "ok    A symmetric positive definite\n";
   }
+  if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal) {
+    // The solver reads a declared-diagonal A on its diagonal only: anything else would be ignored.
+    Eigen::Matrix<S, N, N> off = at.mass_matrix;
+    off.diagonal().setZero();
+    const S off_max = off.cwiseAbs().maxCoeff();
+    if (off_max != S(0)) {
+      ++r.failures;
+      detail::appendf(out, "FAIL  A is declared diagonal (kMassMatrix) but max |A_ij|, i != j, = %.3g\n", double(off_max));
+    } else {
+      out += "ok    A diagonal, as declared\n";
+    }
+  }
 
   // Terms along the motion.
   const S h = options.step * (S(1) + q.cwiseAbs().maxCoeff() + qd.cwiseAbs().maxCoeff() + std::abs(t));

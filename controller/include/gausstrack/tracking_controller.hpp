@@ -201,7 +201,7 @@ class TrackingController {
   std::array<Stabilization<Scalar>, static_cast<std::size_t>(P)> row_gains_{};
   VectorN force_limit_ = VectorN::Constant(std::numeric_limits<Scalar>::infinity());
   Terms terms_{};
-  ConstraintSolver<N, P, Scalar> solver_;
+  ConstraintSolver<N, P, Scalar, kMassMatrixOf<M>> solver_;
   ConstraintSolution<N, P, Scalar> solution_;
 };
 

@@ -22,6 +22,7 @@ struct CoupledDuffing {
   using Scalar = Scalar_;
   static constexpr int kDof = 2;
   static constexpr int kConstraints = 1;
+  static constexpr MassMatrix kMassMatrix = MassMatrix::kDiagonal;
   static constexpr int kHolonomicRows = 1;
   using Vector = Eigen::Matrix<Scalar, 2, 1>;
   using Terms = ModelTerms<2, 1, Scalar>;

@@ -20,6 +20,7 @@ struct DuffingChain {
   using Scalar = Scalar_;
   static constexpr int kDof = N;
   static constexpr int kConstraints = P;
+  static constexpr MassMatrix kMassMatrix = MassMatrix::kDiagonal;
   static constexpr int kHolonomicRows = P;
   using Vector = Eigen::Matrix<Scalar, N, 1>;
   using Terms = ModelTerms<N, P, Scalar>;

@@ -16,6 +16,7 @@ struct NonholonomicParticle {
   using Scalar = Scalar_;
   static constexpr int kDof = 3;
   static constexpr int kConstraints = 1;
+  static constexpr MassMatrix kMassMatrix = MassMatrix::kDiagonal;
   static constexpr int kNonholonomicRows = 1;
   using Vector = Eigen::Matrix<Scalar, 3, 1>;
   using Terms = ModelTerms<3, 1, Scalar>;
