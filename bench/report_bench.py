@@ -177,6 +177,12 @@ def main(d):
                        f"{r['p50']:.1f} us | {r['p99']:.1f} us | {r['p999']:.1f} us | {r['max']:.1f} us |")
         out.append("")
 
+    floor = os.path.join(d, "loop_vs_floor", "README.md")
+    if os.path.exists(floor):
+        with open(floor) as f:
+            body = f.read().split("\n", 1)[1]
+        out += ["## The closed loop against the machine's floors (same run)", body]
+
     with open(os.path.join(d, "README.md"), "w") as f:
         f.write("\n".join(out) + "\n")
     print(os.path.join(d, "README.md"))

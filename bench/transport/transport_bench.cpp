@@ -1,8 +1,15 @@
-// transport_bench [--round-trips N] [--lcm-url URL] [--out FILE.json]
+// transport_bench [--round-trips N] [--rate HZ [--seconds S] [--realtime]] [--lcm-url URL] [--out FILE.json]
 // Round trip between two processes on this machine, in one run:
 //   lcm  a plant_state_t published over LCM, answered by a child process that decodes it and
 //        publishes a control_command_t (both encoded into fixed buffers, as the real processes do);
 //   udp  raw UDP datagrams on loopback of the same sizes (the floor).
+// Back to back by default. With --rate, each round trip starts at its own period's deadline, as
+// the plant's do (absolute deadlines on CLOCK_MONOTONIC, the plant's PeriodScheduler), and a
+// third path measures the machine's own floor in the manner of cyclictest:
+//   sleep  the same paced loop with nothing in it: how late the wake-ups are, and how many are
+//          later than half a period (the loop's deadline misses).
+// --realtime applies what `gausstrack-run --realtime` applies: SCHED_FIFO 80, mlockall, the pacing
+// process pinned to the last CPU and the answering one to the one before.
 // Prints p50/p99/p99.9/max of each and writes them as JSON.
 #include <arpa/inet.h>
 #include <lcm/lcm-cpp.hpp>
@@ -13,7 +20,9 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <memory>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -23,11 +32,38 @@
 
 #include "gausstrack/control_command_t.hpp"
 #include "gausstrack/nodes/latency_recorder.hpp"
+#include "gausstrack/nodes/plant_node.hpp"
 #include "gausstrack/plant_state_t.hpp"
 
 namespace {
 
 using gausstrack::nodes::LatencyRecorder;
+using gausstrack::nodes::PeriodScheduler;
+
+// Pacing of one path: none (back to back) or one round trip per period.
+struct Pacing {
+  double rate_hz = 0;
+  bool realtime = false;
+  int cpus = 1;
+  std::unique_ptr<PeriodScheduler> scheduler;
+  void start(std::size_t periods) {
+    if (rate_hz > 0)
+      scheduler = std::make_unique<PeriodScheduler>(static_cast<std::int64_t>(1e9 / rate_hz),
+                                                    gausstrack::nodes::monotonic_ns() + 1000000, periods);
+  }
+  void wait(long k) {
+    if (scheduler) scheduler->wait_for(k);
+  }
+  // The process that paces (the plant's role) and the one that answers (the controller's).
+  void apply(bool pacing_side) const {
+    if (!realtime) return;
+    gausstrack::nodes::ProcessOptions o;
+    o.rt_priority = 80;
+    o.lock_memory = true;
+    o.cpu = pacing_side ? cpus - 1 : std::max(0, cpus - 2);
+    gausstrack::nodes::apply_realtime(o, "transport_bench");
+  }
+};
 
 std::int64_t now_ns() {
   timespec t{};
@@ -60,7 +96,8 @@ struct Echo {
   }
 };
 
-int lcm_echo(const std::string& url) {
+int lcm_echo(const std::string& url, const Pacing& pacing) {
+  pacing.apply(false);
   lcm::LCM lcm(url);
   if (!lcm.good()) return 1;
   Echo echo{&lcm};
@@ -78,7 +115,8 @@ struct Pong {
   }
 };
 
-bool lcm_round_trips(const std::string& url, long n, LatencyRecorder& rt_us, int& state_bytes, int& command_bytes) {
+bool lcm_round_trips(const std::string& url, long n, Pacing& pacing, LatencyRecorder& rt_us, int& state_bytes,
+                     int& command_bytes) {
   lcm::LCM lcm(url);
   if (!lcm.good()) return false;
   Pong pong;
@@ -101,8 +139,10 @@ bool lcm_round_trips(const std::string& url, long n, LatencyRecorder& rt_us, int
     send(0);
     lcm.handleTimeout(50);
   }
-  const long warmup = 1000;
+  const long warmup = pacing.rate_hz > 0 ? 0 : 1000;
+  pacing.start(static_cast<std::size_t>(n));
   for (long k = 1; k <= n + warmup; ++k) {
+    pacing.wait(k - 1);
     const std::int64_t t0 = now_ns();
     send(k);
     while (pong.answered != k)
@@ -125,7 +165,7 @@ int udp_echo(int fd, int state_bytes, int command_bytes) {
   }
 }
 
-bool udp_round_trips(long n, int state_bytes, int command_bytes, LatencyRecorder& rt_us) {
+bool udp_round_trips(long n, int state_bytes, int command_bytes, Pacing& pacing, LatencyRecorder& rt_us) {
   const int server = socket(AF_INET, SOCK_DGRAM, 0);
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
@@ -135,17 +175,23 @@ bool udp_round_trips(long n, int state_bytes, int command_bytes, LatencyRecorder
       getsockname(server, reinterpret_cast<sockaddr*>(&addr), &len) != 0)
     return false;
   const pid_t child = fork();
-  if (child == 0) _exit(udp_echo(server, state_bytes, command_bytes));
+  if (child == 0) {
+    pacing.apply(false);
+    _exit(udp_echo(server, state_bytes, command_bytes));
+  }
   close(server);
   const int client = socket(AF_INET, SOCK_DGRAM, 0);
   std::vector<char> out(static_cast<std::size_t>(state_bytes)), in(static_cast<std::size_t>(command_bytes) + 16);
   pollfd p{client, POLLIN, 0};
   bool ok = true;
-  for (long k = 0; k < n + 1000 && ok; ++k) {
+  const long warmup = pacing.rate_hz > 0 ? 0 : 1000;
+  pacing.start(static_cast<std::size_t>(n));
+  for (long k = 0; k < n + warmup && ok; ++k) {
+    pacing.wait(k);
     const std::int64_t t0 = now_ns();
     sendto(client, out.data(), out.size(), 0, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
     ok = poll(&p, 1, 1000) == 1 && recv(client, in.data(), in.size(), 0) == command_bytes;
-    if (k >= 1000) rt_us.add(static_cast<double>(now_ns() - t0) * 1e-3);
+    if (k >= warmup) rt_us.add(static_cast<double>(now_ns() - t0) * 1e-3);
   }
   sendto(client, out.data(), 1, 0, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
   close(client);
@@ -154,47 +200,89 @@ bool udp_round_trips(long n, int state_bytes, int command_bytes, LatencyRecorder
   return ok;
 }
 
-void print(const char* name, const LatencyRecorder& r) {
-  std::printf("%-22s p50 %7.1f us  p99 %7.1f  p99.9 %7.1f  max %8.1f  (%zu round trips)\n", name, r.quantile(0.5),
-              r.quantile(0.99), r.quantile(0.999), r.max(), r.count());
+void print(const char* name, const LatencyRecorder& r, const char* what = "round trips") {
+  std::printf("%-22s p50 %7.1f us  p99 %7.1f  p99.9 %7.1f  max %8.1f  (%zu %s)\n", name, r.quantile(0.5),
+              r.quantile(0.99), r.quantile(0.999), r.max(), r.count(), what);
+}
+
+// The paced path's wake-ups: lateness and misses, printed and as JSON members.
+std::string wake_json(const char* name, const Pacing& pacing) {
+  if (!pacing.scheduler) return "";
+  char head[128];
+  std::snprintf(head, sizeof head, "%s wake-ups", name);
+  print(head, pacing.scheduler->wake_late_us(), "periods");
+  std::printf("%-22s %ld deadline misses (woke more than half a period late)\n", "", pacing.scheduler->misses());
+  return ", " + pacing.scheduler->wake_late_us().json((std::string(name) + "_wake_late_us").c_str()) + ", \"" + name +
+         "_deadline_misses\": " + std::to_string(pacing.scheduler->misses());
+}
+
+// The cyclictest-style floor: the paced loop with nothing in it.
+void sleep_only(long n, Pacing& pacing) {
+  pacing.start(static_cast<std::size_t>(n));
+  for (long k = 0; k < n; ++k) pacing.wait(k);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   long n = 20000;
+  double seconds = 5;
+  Pacing pacing;
+  pacing.cpus = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
   std::string url = "udpm://239.255.76.67:7671?ttl=0", out;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--round-trips" && i + 1 < argc) n = std::atol(argv[++i]);
+    else if (a == "--rate" && i + 1 < argc) pacing.rate_hz = std::atof(argv[++i]);
+    else if (a == "--seconds" && i + 1 < argc) seconds = std::atof(argv[++i]);
+    else if (a == "--realtime") pacing.realtime = true;
     else if (a == "--lcm-url" && i + 1 < argc) url = argv[++i];
     else if (a == "--out" && i + 1 < argc) out = argv[++i];
-    else return std::fprintf(stderr, "usage: %s [--round-trips N] [--lcm-url URL] [--out FILE.json]\n", argv[0]), 2;
+    else
+      return std::fprintf(stderr, "usage: %s [--round-trips N] [--rate HZ [--seconds S] [--realtime]] [--lcm-url URL] "
+                                  "[--out FILE.json]\n", argv[0]), 2;
   }
+  if (!(pacing.rate_hz >= 0) || pacing.rate_hz > 1e6 || !(seconds > 0))
+    return std::fprintf(stderr, "error: --rate must be in [0, 1e6] Hz and --seconds positive\n"), 2;
+  if (pacing.rate_hz > 0) n = std::max(1L, static_cast<long>(seconds * pacing.rate_hz));
   if (n <= 0) return std::fprintf(stderr, "error: --round-trips must be positive\n"), 2;
   const auto capacity = static_cast<std::size_t>(n);
   LatencyRecorder lcm_us(capacity), udp_us(capacity);
   int state_bytes = 0, command_bytes = 0;
+  std::string wake;
 
+  // The floor first, in the pacing process's own setting (the parent applies it after forking the
+  // children, which apply theirs).
   const pid_t child = fork();
-  if (child == 0) _exit(lcm_echo(url));
-  const bool lcm_ok = lcm_round_trips(url, n, lcm_us, state_bytes, command_bytes);
+  if (child == 0) _exit(lcm_echo(url, pacing));
+  pacing.apply(true);
+  if (pacing.rate_hz > 0) {
+    sleep_only(n, pacing);
+    wake += wake_json("sleep", pacing);
+  }
+  const bool lcm_ok = lcm_round_trips(url, n, pacing, lcm_us, state_bytes, command_bytes);
   if (!lcm_ok) kill(child, SIGTERM);
   int status = 0;
   waitpid(child, &status, 0);
   if (!lcm_ok) return std::fprintf(stderr, "error: LCM round trips failed on %s\n", url.c_str()), 1;
-  if (!udp_round_trips(n, state_bytes, command_bytes, udp_us))
+  std::string lcm_wake;
+  if (pacing.rate_hz > 0) lcm_wake = wake_json("lcm", pacing);
+  if (!udp_round_trips(n, state_bytes, command_bytes, pacing, udp_us))
     return std::fprintf(stderr, "error: UDP loopback round trips failed\n"), 1;
+  std::string udp_wake;
+  if (pacing.rate_hz > 0) udp_wake = wake_json("udp", pacing);
 
-  std::printf("round trip between two processes on loopback: state %d bytes out, command %d bytes back\n",
-              state_bytes, command_bytes);
+  std::printf("round trip between two processes on loopback: state %d bytes out, command %d bytes back%s\n",
+              state_bytes, command_bytes, pacing.rate_hz > 0 ? ", one per period" : ", back to back");
   print("lcm (plant_state_t)", lcm_us);
   print("raw udp (same sizes)", udp_us);
   std::printf("lcm / udp at p50: %.2f\n", lcm_us.quantile(0.5) / udp_us.quantile(0.5));
   if (!out.empty()) {
     std::ofstream f(out);
-    f << "{\"round_trips\": " << n << ", \"state_bytes\": " << state_bytes << ", \"command_bytes\": " << command_bytes
-      << ", \"lcm_url\": \"" << url << "\", " << lcm_us.json("lcm_us") << ", " << udp_us.json("udp_us") << "}\n";
+    f << "{\"round_trips\": " << n << ", \"rate_hz\": " << pacing.rate_hz
+      << ", \"realtime\": " << (pacing.realtime ? "true" : "false") << ", \"state_bytes\": " << state_bytes
+      << ", \"command_bytes\": " << command_bytes << ", \"lcm_url\": \"" << url << "\", " << lcm_us.json("lcm_us")
+      << ", " << udp_us.json("udp_us") << wake << lcm_wake << udp_wake << "}\n";
     if (!f) return std::fprintf(stderr, "error: cannot write %s\n", out.c_str()), 1;
   }
   return 0;

@@ -1,0 +1,145 @@
+#!/usr/bin/python3
+"""The closed loop against the machine's own floors, measured in one run: for each control rate,
+scheduler (default, --realtime) and load (quiet, one CPU hog), first `transport_bench --rate R`
+(a bare clock_nanosleep loop in the manner of cyclictest, then bare LCM and raw UDP round trips
+paced at the same rate and scheduling), then `gausstrack-run` on the Duffing scene at that rate.
+Writes OUT/loop_vs_floor.json, the programs' outputs, and OUT/README.md with the table and the
+targets (the loop's round trip within 1.2x of bare LCM at the same pace; its deadline misses and
+wake-up lateness within 1.2x of the floor's; --realtime never worse than the default scheduler).
+
+usage: loop_vs_floor.py BIN_DIR SCENE OUT [--seconds S] [--rates 1000,10000] [--no-hog]
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+
+def run(cmd, log):
+    with open(log, "w") as f:
+        return subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, timeout=600).returncode
+
+
+def quantiles(doc, key):
+    q = doc.get(key) or {}
+    return {k: q.get(k, float("nan")) for k in ("p50", "p99", "p999", "max")}
+
+
+def measure(bin_dir, scene, out, rate, realtime, hog, seconds):
+    tag = f"{rate:g}hz_{'realtime' if realtime else 'default'}_{'hog' if hog else 'quiet'}"
+    hogs = [subprocess.Popen(["yes"], stdout=subprocess.DEVNULL)] if hog else []
+    try:
+        rt = ["--realtime"] if realtime else []
+        tj = os.path.join(out, f"transport_{tag}.json")
+        if run([os.path.join(bin_dir, "bench", "transport_bench"), "--rate", f"{rate:g}", "--seconds", f"{seconds:g}",
+                "--out", tj] + rt, os.path.join(out, f"transport_{tag}.txt")) != 0:
+            return {"tag": tag, "error": "transport_bench failed"}
+        loop_dir = os.path.join(out, f"loop_{tag}")
+        code = run([os.path.join(bin_dir, "bin", "gausstrack-run"), scene, "--rate", f"{rate:g}", "--duration",
+                    f"{seconds:g}", "--set", "tracking.stabilization={zeta: 1.0, omega: 20.0}", "--out", loop_dir,
+                    "--no-plots", "--channel-prefix", f"FLOOR{os.getpid()}"] + rt,
+                   os.path.join(out, f"loop_{tag}.txt"))
+        if code != 0:
+            return {"tag": tag, "error": f"gausstrack-run exited {code}"}
+    finally:
+        for h in hogs:
+            h.kill()
+            h.wait()
+    with open(tj) as f:
+        t = json.load(f)
+    with open(os.path.join(loop_dir, "summary.json")) as f:
+        s = json.load(f)
+    periods = t["round_trips"]
+    loop_periods = s.get("states_published", 0) or 1
+    return {
+        "tag": tag, "rate_hz": rate, "realtime": realtime, "hog": hog, "periods": periods,
+        "floor_wake_us": quantiles(t, "sleep_wake_late_us"), "floor_misses": t.get("sleep_deadline_misses"),
+        "udp_us": quantiles(t, "udp_us"), "lcm_us": quantiles(t, "lcm_us"),
+        "lcm_wake_us": quantiles(t, "lcm_wake_late_us"), "lcm_misses": t.get("lcm_deadline_misses"),
+        "loop_us": quantiles(s, "round_trip_us"), "loop_wake_us": quantiles(s, "wake_late_us"),
+        "loop_misses": s.get("deadline_misses"), "loop_periods": loop_periods,
+        "loop_missing": s.get("commands_missing"), "loop_max_error": s.get("max_tracking_error"),
+    }
+
+
+def ratio(a, b):
+    return a / b if b else float("inf") if a else 1.0
+
+
+def report(rows, out, seconds):
+    lines = ["# The closed loop against the machine's floors", "",
+             f"Written by `bench/transport/loop_vs_floor.py`; every row is one run of {seconds:g} s per path, all "
+             "rows in one invocation. `floor`: a bare `clock_nanosleep` loop at the rate (cyclictest's method); "
+             "`UDP`, `LCM`: bare round trips paced at the same rate and scheduling; `loop`: `gausstrack-run` (the "
+             "Duffing scene, plant and controller processes). Round trips and wake-up lateness in us (p50 / p99); "
+             "misses: wake-ups more than half a period late.", "",
+             "| rate | scheduler | load | floor wake | floor misses | UDP | LCM | loop | loop / LCM (p50) "
+             "| loop wake | loop misses |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        if "error" in r:
+            lines.append(f"| {r['tag']} | | | **{r['error']}** | | | | | | | |")
+            continue
+        f, u, l, p, w = r["floor_wake_us"], r["udp_us"], r["lcm_us"], r["loop_us"], r["loop_wake_us"]
+        lines.append(
+            f"| {r['rate_hz']:g} Hz | {'realtime' if r['realtime'] else 'default'} | {'1 hog' if r['hog'] else 'quiet'} "
+            f"| {f['p50']:.0f} / {f['p99']:.0f} | {r['floor_misses']} / {r['periods']} | {u['p50']:.0f} / {u['p99']:.0f} "
+            f"| {l['p50']:.0f} / {l['p99']:.0f} | {p['p50']:.0f} / {p['p99']:.0f} | {ratio(p['p50'], l['p50']):.2f}x "
+            f"| {w['p50']:.0f} / {w['p99']:.0f} | {r['loop_misses']} / {r['loop_periods']} |")
+    lines += ["", "## Targets", "", "| target | case | measured | met |", "|---|---|---|---|"]
+
+    def target(label, case, text, ok):
+        lines.append(f"| {label} | {case} | {text} | {'yes' if ok else '**no**'} |")
+
+    ok_rows = [r for r in rows if "error" not in r]
+    for r in ok_rows:
+        case = r["tag"]
+        x = ratio(r["loop_us"]["p50"], r["lcm_us"]["p50"])
+        target("loop round trip <= 1.2x bare LCM at the same pace (p50)", case, f"{x:.2f}x", x <= 1.2)
+        fm = max(r["floor_misses"] or 0, 0) / r["periods"]
+        lm = (r["loop_misses"] or 0) / r["loop_periods"]
+        target("loop deadline misses <= 1.2x the floor's (per period)", case, f"{lm:.2e} vs {fm:.2e}",
+               lm <= 1.2 * fm or lm == 0)
+        x = ratio(r["loop_wake_us"]["p99"], r["floor_wake_us"]["p99"])
+        target("loop wake-up lateness <= 1.2x the floor's (p99)", case, f"{x:.2f}x", x <= 1.2)
+    for r in ok_rows:
+        if r["realtime"]:
+            continue
+        twin = [q for q in ok_rows if q["realtime"] and q["rate_hz"] == r["rate_hz"] and q["hog"] == r["hog"]]
+        if twin:
+            q = twin[0]
+            case = f"{r['rate_hz']:g} Hz, {'1 hog' if r['hog'] else 'quiet'}"
+            worse_p50 = q["loop_us"]["p50"] > r["loop_us"]["p50"] * 1.05
+            worse_miss = (q["loop_misses"] or 0) > (r["loop_misses"] or 0)
+            target("--realtime never worse than the default scheduler (loop p50 within 5%, misses)", case,
+                   f"p50 {q['loop_us']['p50']:.0f} vs {r['loop_us']['p50']:.0f} us, misses {q['loop_misses']} vs "
+                   f"{r['loop_misses']}", not worse_p50 and not worse_miss)
+    with open(os.path.join(out, "README.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+def main(argv):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("bin_dir")
+    p.add_argument("scene")
+    p.add_argument("out")
+    p.add_argument("--seconds", type=float, default=5)
+    p.add_argument("--rates", default="1000,10000")
+    p.add_argument("--no-hog", action="store_true")
+    a = p.parse_args(argv)
+    os.makedirs(a.out, exist_ok=True)
+    rows = []
+    for rate in [float(x) for x in a.rates.split(",")]:
+        for realtime in (False, True):
+            for hog in (False,) if a.no_hog else (False, True):
+                rows.append(measure(a.bin_dir, a.scene, a.out, rate, realtime, hog, a.seconds))
+                print(json.dumps(rows[-1]), flush=True)
+    with open(os.path.join(a.out, "loop_vs_floor.json"), "w") as f:
+        json.dump(rows, f, indent=1)
+    report(rows, a.out, a.seconds)
+    return 0 if all("error" not in r for r in rows) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
