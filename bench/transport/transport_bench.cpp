@@ -7,7 +7,8 @@
 // the plant's do (absolute deadlines on CLOCK_MONOTONIC, the plant's PeriodScheduler), and a
 // third path measures the machine's own floor in the manner of cyclictest:
 //   sleep  the same paced loop with nothing in it: how late the wake-ups are, and how many are
-//          later than half a period (the loop's deadline misses).
+//          later than half a period (the loop's deadline misses). The scheduler sets the timer
+//          slack to 1 ns, as it does in the plant.
 // --realtime applies what `gausstrack-run --realtime` applies: SCHED_FIFO 80, mlockall, the pacing
 // process pinned to the last CPU and the answering one to the one before.
 // Prints p50/p99/p99.9/max of each and writes them as JSON.
