@@ -425,10 +425,11 @@ TEST(Reuse, KeptFactorizationAnswersAsAFreshSolver) {
     for (int it = 0; it < 50; ++it) {
       auto sys = rng.system<6, 3>();
       if (it % 5 == 4) sys.D.row(2) = sys.D.row(1) + 1e-9 * rng.matrix<1, 6>();  // nearly dependent
-      for (int change = 0; change < 4; ++change) {
+      for (int change = 0; change < 5; ++change) {
         if (change == 1) sys.A(3, 2) = sys.A(2, 3) = std::nextafter(sys.A(2, 3), 10.0);
         if (change == 2) sys.D(1, 4) = std::nextafter(sys.D(1, 4), -10.0);
         if (change == 3) sys.A(5, 5) = std::nextafter(sys.A(5, 5), 10.0);  // the diagonal
+        // change == 4: A and D as before, only f, Q and g new (the factorization is kept).
         sys.f = rng.matrix<6, 1>();
         sys.Q = rng.matrix<6, 1>();
         sys.g = rng.matrix<3, 1>();
@@ -445,6 +446,31 @@ TEST(Reuse, KeptFactorizationAnswersAsAFreshSolver) {
   }
 }
 
+// The same with one constraint row (the scalar normal equations), the row shrinking to zero on
+// the way (where the Cholesky path hands over to the SVD).
+TEST(Reuse, OneRowKeptFactorizationAnswersAsAFreshSolver) {
+  RandomSource<double> rng(24);
+  for (InverseStrategy s : kStrategies) {
+    auto kept = solver_for<3, 1>(s, -1, 1e-6);
+    ConstraintSolution<3, 1> a, b;
+    for (int it = 0; it < 50; ++it) {
+      auto sys = rng.system<3, 1>();
+      if (it % 7 == 6) sys.D.setZero();
+      for (int change = 0; change < 3; ++change) {
+        if (change == 1 && sys.D(0, 1) != 0) sys.D(0, 1) = std::nextafter(sys.D(0, 1), 10.0);
+        sys.f = rng.matrix<3, 1>();
+        sys.Q = rng.matrix<3, 1>();
+        sys.g = rng.matrix<1, 1>();
+        auto fresh = solver_for<3, 1>(s, -1, 1e-6);
+        ASSERT_EQ(kept.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, a), Status::kOk);
+        ASSERT_EQ(fresh.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, b), Status::kOk);
+        expect_identical(a, b);
+        ASSERT_FALSE(HasFailure()) << to_string(s) << " iteration " << it << " change " << change;
+      }
+    }
+  }
+}
+
 // Expectation: a failed call (NaN in A or D, A not positive definite) leaves nothing behind: the
 // next call with the earlier, good A and D answers as a fresh solver; and new options apply at
 // once (the kept factorization was the old strategy's).
@@ -453,17 +479,28 @@ TEST(Reuse, FailuresAndNewOptionsDropTheKeptFactorization) {
   const auto sys = rng.system<6, 3>();
   ConstraintSolver<6, 3> kept;
   ConstraintSolution<6, 3> a, b;
+  ConstraintSolver<6, 3> fresh;
+  ASSERT_EQ(fresh.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, b), Status::kOk);
   ASSERT_EQ(kept.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, a), Status::kOk);
-  auto bad_a = sys.A;
-  bad_a(1, 1) = -1;
-  EXPECT_EQ(kept.solve(bad_a, sys.f, sys.Q, sys.D, sys.g, a), Status::kMassMatrixNotPositiveDefinite);
+  // A NaN in D while the factorization for this A and D is kept: refused, and then kept still.
   auto nan_d = sys.D;
   nan_d(2, 0) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(kept.solve(sys.A, sys.f, sys.Q, nan_d, sys.g, a), Status::kNonFiniteInput);
   EXPECT_EQ(a.diagnostics.non_finite_inputs, input::kConstraintMatrix);
   ASSERT_EQ(kept.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, a), Status::kOk);
-  ConstraintSolver<6, 3> fresh;
-  ASSERT_EQ(fresh.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, b), Status::kOk);
+  expect_identical(a, b);
+  // The same A that is not positive definite, twice: it fails both times (no failed factor kept).
+  auto bad_a = sys.A;
+  bad_a(1, 1) = -1;
+  EXPECT_EQ(kept.solve(bad_a, sys.f, sys.Q, sys.D, sys.g, a), Status::kMassMatrixNotPositiveDefinite);
+  EXPECT_EQ(kept.solve(bad_a, sys.f, sys.Q, sys.D, sys.g, a), Status::kMassMatrixNotPositiveDefinite);
+  expect_all_zero(a);
+  // A NaN in A: refused by name.
+  auto nan_a = sys.A;
+  nan_a(4, 1) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(kept.solve(nan_a, sys.f, sys.Q, sys.D, sys.g, a), Status::kNonFiniteInput);
+  EXPECT_EQ(a.diagnostics.non_finite_inputs, input::kMassMatrix);
+  ASSERT_EQ(kept.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, a), Status::kOk);
   expect_identical(a, b);
 
   SolverOptions<double> svd;
