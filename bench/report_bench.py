@@ -12,7 +12,7 @@ import os
 import sys
 
 STRATEGIES = ("cholesky", "cholesky_refactor", "cholesky_dense_refactor", "svd", "cod", "damped")
-BASELINES = ("literal_fixed", "dynamic_user", "dynamic_kkt", "plain_fixed", "closed_form")
+BASELINES = ("literal_fixed", "dynamic_user", "dynamic_kkt", "plain_fixed", "model_terms", "closed_form")
 
 
 def load(d, name):
@@ -123,6 +123,23 @@ def main(d):
             for s_ in ("svd", "cod"):
                 r = t(f"law/{m}/{s_}") / default
                 target(f"rank-revealing ({s_.upper()}) <= 3x default", m, r, r <= 3)
+
+        out += ["", "### Where the time goes: the model's terms and the solve", "",
+                "Every row evaluates the model's terms once; `model_terms` times that alone. The solve is a row's "
+                "time minus it (same run); the last two columns are the KKT baseline's solve over the law's.", "",
+                "| system | model terms | solve: default | solve: general | solve: plain_fixed | solve: dynamic KKT "
+                "| KKT / default (solve) | KKT / general (solve) |", "|---|---|---|---|---|---|---|---|"]
+        for m in models:
+            terms = t(f"baseline/{m}/model_terms")
+            if math.isnan(terms):
+                continue
+            general = t(f"law/{m}/cholesky_dense_refactor")
+            if math.isnan(general):
+                general = t(f"law/{m}/cholesky_refactor")
+            solve = [t(f"law/{m}/cholesky") - terms, general - terms, t(f"baseline/{m}/plain_fixed") - terms,
+                     t(f"baseline/{m}/dynamic_kkt") - terms]
+            out.append(f"| {m} | {ns(terms)} | " + " | ".join(ns(v) for v in solve)
+                       + f" | {solve[3] / solve[0]:.2f}x | {solve[3] / solve[1]:.2f}x |")
 
         chains = sorted(((int(m.split("_")[1].split("x")[0]), m) for m in models if m.startswith("chain_")))
         if len(chains) >= 3:

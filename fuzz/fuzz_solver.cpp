@@ -1,5 +1,5 @@
-// The law's inputs as raw bytes: A, f, Q, D, g of the solver at 2x1, 3x2 and 4x2 under each
-// strategy and fuzzed options, and the Duffing tracking controller at a fuzzed state with fuzzed
+// The law's inputs as raw bytes: A, f, Q, D, g of the solver at 2x1, 3x2 and 4x2 (and 3x2 with
+// the mass matrix declared diagonal) under each strategy and fuzzed options, and the Duffing tracking controller at a fuzzed state with fuzzed
 // gains and actuator limits.
 //
 // Properties (any violation aborts, so libFuzzer keeps the input):
@@ -29,9 +29,9 @@ void fill(FuzzInput& in, bool raw, Eigen::MatrixBase<Derived>& m) {
     for (Eigen::Index i = 0; i < m.rows(); ++i) m(i, j) = in.number(raw);
 }
 
-template <int N, int P>
+template <int N, int P, gausstrack::MassMatrix kMass = gausstrack::MassMatrix::kDense>
 void solve_case(FuzzInput& in) {
-  using Solver = gausstrack::ConstraintSolver<N, P>;
+  using Solver = gausstrack::ConstraintSolver<N, P, double, kMass>;
   const std::uint8_t mode = in.byte();
   const bool raw = (mode & 1) != 0;
   typename Solver::Options options;
@@ -57,7 +57,9 @@ void solve_case(FuzzInput& in) {
   const gausstrack::Status status = solver.solve(A, f, Q, D, g, out);
   GAUSSTRACK_FUZZ_CHECK(status == out.diagnostics.status);
 
-  const bool finite_input = A.allFinite() && f.allFinite() && Q.allFinite() && D.allFinite() && g.allFinite();
+  // A declared-diagonal solver reads the diagonal of A alone.
+  const bool finite_a = kMass == gausstrack::MassMatrix::kDiagonal ? A.diagonal().allFinite() : A.allFinite();
+  const bool finite_input = finite_a && f.allFinite() && Q.allFinite() && D.allFinite() && g.allFinite();
   if (!finite_input) GAUSSTRACK_FUZZ_CHECK(status == gausstrack::Status::kNonFiniteInput);
   GAUSSTRACK_FUZZ_CHECK(out.acceleration.allFinite() && out.constraint_force.allFinite() &&
                         out.force_from_impressed.allFinite() && out.force_from_rhs.allFinite() &&
@@ -134,10 +136,11 @@ void controller_case(FuzzInput& in) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   FuzzInput in(data, size);
-  switch (in.byte() % 4) {
+  switch (in.byte() % 5) {
     case 0: solve_case<2, 1>(in); break;
     case 1: solve_case<3, 2>(in); break;
     case 2: solve_case<4, 2>(in); break;
+    case 3: solve_case<3, 2, gausstrack::MassMatrix::kDiagonal>(in); break;
     default: controller_case(in); break;
   }
   return 0;

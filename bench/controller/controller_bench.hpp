@@ -10,6 +10,8 @@
 //   plain_fixed    the default path's mathematics at fixed size with no checks and no
 //                  diagnostics: LLT of A, B^T = L^-1 D^T, LLT of B B^T, both parts of eq. (32)
 //                  and q''; the floor the default's diagnostics are measured against;
+//   model_terms    the model's terms A, f, Q, D, g alone (one evaluate_model, as every row
+//                  above and the law do): the part of each row that is not the solve;
 //   closed_form    (Duffing only) the hand-derived force Q' = (r, -r) / (1/m1 + 1/m2),
 //                  r = s'' - (a1 - a2): the floor.
 // The law runs as the default (law/<m>/cholesky: the mass matrix as the model declares it, the
@@ -198,6 +200,18 @@ void bench_plain_fixed(benchmark::State& state) {
   });
 }
 
+template <typename M>
+void bench_model_terms(benchmark::State& state) {
+  static const States<M> s;
+  const M model{};
+  TermsOf<M> t;
+  measure(state, [&](std::size_t k) {
+    evaluate_model(model, s.q[k], s.qd[k], s.t[k], t);
+    benchmark::DoNotOptimize(t.constraint_rhs.data());
+    benchmark::ClobberMemory();
+  });
+}
+
 inline void bench_timer_overhead(benchmark::State& state) {
   measure(state, [](std::size_t k) { benchmark::DoNotOptimize(k); });
 }
@@ -217,6 +231,7 @@ void register_model(const std::string& name) {
   if constexpr (kMassMatrixOf<M> != MassMatrix::kDense)
     benchmark::RegisterBenchmark(("law/" + size + "/cholesky_dense_refactor").c_str(),
                                  [](benchmark::State& st) { bench_law<DenseMass<M>>(st, kDefault, false); });
+  benchmark::RegisterBenchmark(("baseline/" + size + "/model_terms").c_str(), bench_model_terms<M>);
   benchmark::RegisterBenchmark(("baseline/" + size + "/plain_fixed").c_str(), bench_plain_fixed<M>);
   benchmark::RegisterBenchmark(("baseline/" + size + "/literal_fixed").c_str(), bench_literal_fixed<M>);
   benchmark::RegisterBenchmark(("baseline/" + size + "/dynamic_user").c_str(), bench_dynamic_user<M>);

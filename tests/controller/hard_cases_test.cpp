@@ -3,6 +3,7 @@
 // extreme input. Across all of them no finite input yields a non-finite output.
 #include <array>
 #include <limits>
+#include <string>
 
 #include "gausstrack/constraint_solver.hpp"
 #include "test_support.hpp"
@@ -346,10 +347,34 @@ TEST(HardCases, ExtremeMagnitudesNeverProduceNonFiniteOutput) {
   }
 }
 
-// Found by fuzz_solver: entries near the range limit whose solve is finite but whose residual
-// D q'' - g overflows to NaN. The answer cannot be verified, so it must say so (constraints not
-// met, residual infinite) instead of a NaN residual that no tolerance test catches.
+// Expectation: a finite answer whose residual D q'' - g overflows (nearly dependent rows near
+// 1e150, g near 1e300: q'' near 1e162, each product D_ij q''_j beyond the range) cannot be
+// verified, so it says so (constraints not met, residual infinite) instead of a NaN residual that
+// no tolerance test catches.
 TEST(HardCases, UnverifiableResidualIsReported) {
+  Eigen::Matrix<double, 2, 3> D;
+  D << 1, 1, 0, 1, 1 + 1e-12, 0;
+  D *= 1e150;
+  const Eigen::Vector2d g(0, 1e300);
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  for (InverseStrategy s : {InverseStrategy::kCholeskyWithFallback, InverseStrategy::kSvd}) {
+    auto solver = solver_for<3, 2>(s);
+    ConstraintSolution<3, 2> sol;
+    const Status st = solver.solve(Eigen::Matrix3d::Identity(), zero, zero, D, g, sol);
+    ASSERT_EQ(st, Status::kOk) << to_string(s);
+    expect_all_finite(sol);
+    // The case is what it claims: a finite answer whose residual overflows.
+    ASSERT_FALSE(std::isfinite((D * sol.acceleration - g).norm()));
+    EXPECT_GT(sol.acceleration.norm(), 1e161);
+    EXPECT_TRUE(sol.diagnostics.has(warning::kConstraintsNotMet));
+    EXPECT_EQ(sol.diagnostics.residual_norm, std::numeric_limits<double>::infinity());
+  }
+}
+
+// Found by fuzz_solver (it then reported a rank-0 answer, ok with an overflowing residual):
+// entries near the range limit for which B = D L^-T is finite but its complete orthogonal
+// decomposition is not. Expectation: kNonFiniteResult with zero outputs, not an answer.
+TEST(HardCases, OverflowingDecompositionIsANonFiniteResult) {
   // The finding's numbers, each matrix column by column.
   const double a[] = {0x0.64d0006000000p-1022, 0x0.100ff00000000p-1022, 0x1.effffffffffffp-1008,
                       0x1.d4d4d4d000001p+213,  0x1.d4d4d4d4d4d4dp+213,  0x1.d4d4d4d4d4d4dp+213,
@@ -363,13 +388,8 @@ TEST(HardCases, UnverifiableResidualIsReported) {
   const Eigen::Vector2d g(0x0.04d4d4d4d4d4dp-1022, 0x1.d00000080fe00p+213);
   auto solver = solver_for<3, 2>(InverseStrategy::kCompleteOrthogonal, -1, 0x0.00000004d0033p-1022);
   ConstraintSolution<3, 2> sol;
-  const Status st = solver.solve(A, f, Q, D, g, sol);
-  expect_all_finite(sol);
-  // The case is what it was: a finite answer whose residual overflows.
-  ASSERT_FALSE(failed(st)) << to_string(st);
-  ASSERT_FALSE(std::isfinite((D * sol.acceleration - g).norm()));
-  EXPECT_TRUE(sol.diagnostics.has(warning::kConstraintsNotMet));
-  EXPECT_EQ(sol.diagnostics.residual_norm, std::numeric_limits<double>::infinity());
+  EXPECT_EQ(solver.solve(A, f, Q, D, g, sol), Status::kNonFiniteResult);
+  expect_all_zero(sol);
 }
 
 // float instantiation: the same answers as double within float precision.
@@ -471,6 +491,33 @@ TEST(Reuse, OneRowKeptFactorizationAnswersAsAFreshSolver) {
   }
 }
 
+// Expectation: a fallback threshold no matrix meets (rcond above 1) sends every call to the SVD,
+// with one row (whose normal equations are a scalar, rcond exactly 1) as with several.
+template <int N, int P>
+void expect_threshold_above_one_falls_back() {
+  RandomSource<double> rng(27);
+  const auto sys = rng.system<N, P>();
+  SolverOptions<double> o;
+  o.fallback_rcond = 1.5;
+  ConstraintSolver<N, P> strict(o);
+  ConstraintSolution<N, P> a, b;
+  ASSERT_EQ(strict.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, a), Status::kOk);
+  EXPECT_TRUE(a.diagnostics.has(warning::kFellBackToSvd));
+  EXPECT_EQ(a.diagnostics.strategy_used, InverseStrategy::kSvd);
+  o.fallback_rcond = 1.0;  // met exactly by the scalar: no fallback there
+  ConstraintSolver<N, P> lenient(o);
+  ASSERT_EQ(lenient.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, b), Status::kOk);
+  if (P == 1) {
+    EXPECT_FALSE(b.diagnostics.has(warning::kFellBackToSvd));
+  }
+  EXPECT_TRUE(a.constraint_force.isApprox(b.constraint_force, 1e-9));
+}
+
+TEST(HardCases, FallbackThresholdAboveOneAlwaysFallsBack) {
+  expect_threshold_above_one_falls_back<3, 1>();
+  expect_threshold_above_one_falls_back<6, 3>();
+}
+
 // Expectation: a failed call (NaN in A or D, A not positive definite) leaves nothing behind: the
 // next call with the earlier, good A and D answers as a fresh solver; and new options apply at
 // once (the kept factorization was the old strategy's).
@@ -511,6 +558,61 @@ TEST(Reuse, FailuresAndNewOptionsDropTheKeptFactorization) {
   ConstraintSolver<6, 3> fresh_svd(svd);
   ASSERT_EQ(fresh_svd.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, b), Status::kOk);
   expect_identical(a, b);
+}
+
+// Found by fuzz_solver: when B = D A^(-1/2) or its factors overflow, the SVD refused its input
+// and left the previous call's singular values in place, so a solver that had solved another
+// system reported other warnings than a fresh one. Expectation: B itself overflowing is
+// kNonFiniteResult with zero outputs in every strategy and mass kind; B finite with norms that
+// overflow (D near the range limit) is either a finite answer or kNonFiniteResult; either way a
+// solver that solved a good system first answers bit for bit as a fresh one, and nothing
+// non-finite is kept for the next call.
+template <typename Solver>
+void expect_overflow_answered_as_fresh(const SolverOptions<double>& o, const Eigen::Matrix<double, 6, 6>& A,
+                                       const Eigen::Matrix<double, 3, 6>& D, bool b_overflows) {
+  RandomSource<double> rng(25);
+  auto good = rng.system<6, 3>();
+  good.A = A.diagonal().cwiseAbs().cwiseMax(1.0).asDiagonal();  // diagonal, for both kinds
+  Solver kept(o), fresh(o);
+  ConstraintSolution<6, 3> a, b, before;
+  ASSERT_EQ(kept.solve(good.A, good.f, good.Q, good.D, good.g, before), Status::kOk);
+  const Status st = kept.solve(A, good.f, good.Q, D, good.g, a);
+  EXPECT_EQ(fresh.solve(A, good.f, good.Q, D, good.g, b), st);
+  expect_identical(a, b);
+  expect_all_finite(a);
+  if (b_overflows) {
+    EXPECT_EQ(st, Status::kNonFiniteResult);
+  }
+  if (failed(st)) {
+    EXPECT_EQ(st, Status::kNonFiniteResult);
+    expect_all_zero(a);
+  }
+  // Back to the good system: the answer of the first call again.
+  ASSERT_EQ(kept.solve(good.A, good.f, good.Q, good.D, good.g, a), Status::kOk);
+  expect_identical(a, before);
+}
+
+TEST(HardCases, OverflowingFactorsAreANonFiniteResultNotStaleState) {
+  RandomSource<double> rng(26);
+  const Eigen::Matrix<double, 3, 6> D = rng.matrix<3, 6>();
+  const Eigen::Matrix<double, 6, 6> tiny_a = Eigen::Matrix<double, 6, 1>::Constant(1e-300).asDiagonal();
+  const Eigen::Matrix<double, 6, 6> unit_a = Eigen::Matrix<double, 6, 6>::Identity();
+  for (InverseStrategy s : kStrategies) {
+    for (double floor : {0.0, 1e300}) {  // a singular-value floor sends every strategy to the SVD
+      SolverOptions<double> o;
+      o.strategy = s;
+      o.min_singular_value = floor;
+      SCOPED_TRACE(std::string(to_string(s)) + (floor > 0 ? " with a floor" : ""));
+      // B = D / 1e-150 with entries near 1e200: overflows.
+      expect_overflow_answered_as_fresh<ConstraintSolver<6, 3>>(o, tiny_a, 1e200 * D, true);
+      expect_overflow_answered_as_fresh<ConstraintSolver<6, 3, double, MassMatrix::kDiagonal>>(o, tiny_a,
+                                                                                             1e200 * D, true);
+      // B = D finite near 1e300: its Gram matrix and column norms overflow.
+      expect_overflow_answered_as_fresh<ConstraintSolver<6, 3>>(o, unit_a, 1e300 * D, false);
+      expect_overflow_answered_as_fresh<ConstraintSolver<6, 3, double, MassMatrix::kDiagonal>>(o, unit_a,
+                                                                                             1e300 * D, false);
+    }
+  }
 }
 
 // Expectation: a solver told the mass matrix is diagonal gives the dense solver's answer (to

@@ -204,7 +204,12 @@ class ConstraintSolver {
       d_norm2_ = D.squaredNorm();
       set_bt(D);  // B^T = L^-1 D^T
       factor_diagnostics_ = SolveDiagnostics<Scalar>{};
-      factorize(factor_diagnostics_);
+      // B or its factors overflowed (entries near the range limit): nothing below could be
+      // trusted, and a factorization of non-finite numbers is not kept.
+      if (!bt_.allFinite() || !factorize(factor_diagnostics_)) {
+        out.diagnostics.warnings = factor_diagnostics_.warnings;
+        return fail(out, Status::kNonFiniteResult);
+      }
       factored_ = true;
     }
     diag = factor_diagnostics_;
@@ -321,37 +326,32 @@ class ConstraintSolver {
     return status;
   }
 
-  // Factor B (held as bt_) with the selected strategy; fills the rank diagnostics.
-  void factorize(SolveDiagnostics<Scalar>& diag) noexcept {
+  // Factor B (held as bt_) with the selected strategy; fills the rank diagnostics. Returns
+  // false when the factors came out non-finite (B finite, but its norms overflowed).
+  bool factorize(SolveDiagnostics<Scalar>& diag) noexcept {
     // With a floor on the singular values, every strategy first asks whether B certainly has
     // none below it; if that cannot be shown, the SVD decides exactly which directions to keep
     // (and sets kNearSingular when it drops one the relative tolerance would have kept).
     if (options_.min_singular_value > Scalar(0) && options_.strategy != InverseStrategy::kSvd &&
         !certainly_above_floor()) {
       diag.warnings |= warning::kFellBackToSvd;
-      factorize_svd(diag);
-      return;
+      return factorize_svd(diag);
     }
     switch (options_.strategy) {
       case InverseStrategy::kCholeskyWithFallback:
-        if (!factorize_normal_equations(Scalar(0), true, diag)) {
-          diag.warnings |= warning::kFellBackToSvd;
-          factorize_svd(diag);
-        }
-        return;
+        if (factorize_normal_equations(Scalar(0), true, diag)) return true;
+        diag.warnings |= warning::kFellBackToSvd;
+        return factorize_svd(diag);
       case InverseStrategy::kDampedLeastSquares:
-        if (!factorize_normal_equations(options_.damping * options_.damping, false, diag)) {
-          diag.warnings |= warning::kFellBackToSvd;
-          factorize_svd(diag);
-        }
-        return;
+        if (factorize_normal_equations(options_.damping * options_.damping, false, diag)) return true;
+        diag.warnings |= warning::kFellBackToSvd;
+        return factorize_svd(diag);
       case InverseStrategy::kSvd:
-        factorize_svd(diag);
-        return;
+        return factorize_svd(diag);
       case InverseStrategy::kCompleteOrthogonal:
-        factorize_cod(diag);
-        return;
+        return factorize_cod(diag);
     }
+    return false;
   }
 
   // True when every singular value of B is shown to be >= min_singular_value: with
@@ -377,9 +377,11 @@ class ConstraintSolver {
   bool factorize_normal_equations(Scalar lambda2, bool require_well_conditioned,
                                   SolveDiagnostics<Scalar>& diag) noexcept {
     if constexpr (P == 1) {
-      // One row: B B^T is the scalar |b|^2, exactly conditioned; only its size can fail.
+      // One row: B B^T is the scalar |b|^2, exactly conditioned (rcond 1); only its size can
+      // fail, or a fallback threshold above 1 that no matrix meets.
       const Scalar gram = bt_.squaredNorm() + lambda2;
       if (!(gram > Scalar(0)) || !std::isfinite(gram)) return false;
+      if (require_well_conditioned && !(Scalar(1) >= options_.fallback_rcond)) return false;
       inverse_gram_ = Scalar(1) / gram;
       used_ = options_.strategy;
       rank_ = 1;
@@ -387,7 +389,6 @@ class ConstraintSolver {
       diag.rank = 1;
       diag.sigma_max = diag.sigma_min_kept = std::sqrt(gram);
       diag.condition_estimate = Scalar(1);
-      (void)require_well_conditioned;
       return true;
     } else {
       MatrixPP gram;
@@ -410,11 +411,14 @@ class ConstraintSolver {
     }
   }
 
-  void factorize_svd(SolveDiagnostics<Scalar>& diag) noexcept {
+  bool factorize_svd(SolveDiagnostics<Scalar>& diag) noexcept {
     used_ = InverseStrategy::kSvd;
     householder_qr_of_bt();  // B^T = Q [R; 0]
     MatrixPP r = qr_.template topRows<P>().template triangularView<Eigen::Upper>();
+    // A non-finite R would leave the SVD's previous singular values in place (Eigen refuses it).
+    if (!r.allFinite()) return false;
     svd_.compute(r, Eigen::ComputeFullU | Eigen::ComputeFullV);  // R = U S V^T
+    if (svd_.info() != Eigen::Success) return false;
     const auto& s = svd_.singularValues();
     rank_ = 0;
     if (s(0) > Scalar(0)) {
@@ -424,6 +428,7 @@ class ConstraintSolver {
       if (rank_ < P && s(rank_) > relative) diag.warnings |= warning::kNearSingular;
     }
     set_rank_diagnostics(diag, s(0), rank_ > 0 ? s(rank_ - 1) : Scalar(0));
+    return true;
   }
 
   // Unblocked Householder QR of B^T in place. Eigen's HouseholderQR would do the same at run
@@ -440,11 +445,12 @@ class ConstraintSolver {
     }
   }
 
-  void factorize_cod(SolveDiagnostics<Scalar>& diag) noexcept {
+  bool factorize_cod(SolveDiagnostics<Scalar>& diag) noexcept {
     used_ = InverseStrategy::kCompleteOrthogonal;
     cod_.setThreshold(options_.rank_tolerance);
     b_ = bt_.transpose();
     cod_.compute(b_);
+    if (!cod_.matrixQTZ().allFinite()) return false;
     rank_ = static_cast<int>(cod_.rank());
     Scalar hi(0), lo(0);
     if (rank_ > 0) {
@@ -453,6 +459,7 @@ class ConstraintSolver {
       lo = t.minCoeff();
     }
     set_rank_diagnostics(diag, hi, lo);
+    return true;
   }
 
   void set_rank_diagnostics(SolveDiagnostics<Scalar>& diag, Scalar hi, Scalar lo) const noexcept {
