@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """The closed loop against the machine's own floors, measured in one run: for each control rate,
-scheduler (default, --realtime) and load (quiet, one CPU hog), first `transport_bench --rate R`
+scheduler (default; --realtime with the two processes on two CPUs, and on one) and load (quiet, one CPU hog), first `transport_bench --rate R`
 (a bare clock_nanosleep loop in the manner of cyclictest, then bare LCM and raw UDP round trips
 paced at the same rate and scheduling), then `gausstrack-run` on the Duffing scene at that rate.
 Writes OUT/loop_vs_floor.json, the programs' outputs, and OUT/README.md with the table and the
@@ -8,6 +8,7 @@ targets (the loop's round trip within 1.2x of bare LCM at the same pace; its dea
 wake-up lateness within 1.2x of the floor's; --realtime never worse than the default scheduler).
 
 usage: loop_vs_floor.py BIN_DIR SCENE OUT [--seconds S] [--rates 1000,10000] [--no-hog]
+                        [--schedulers default,realtime,realtime_1cpu]
 """
 import argparse
 import json
@@ -26,11 +27,22 @@ def quantiles(doc, key):
     return {k: q.get(k, float("nan")) for k in ("p50", "p99", "p999", "max")}
 
 
-def measure(bin_dir, scene, out, rate, realtime, hog, seconds):
-    tag = f"{rate:g}hz_{'realtime' if realtime else 'default'}_{'hog' if hog else 'quiet'}"
+# Schedulers: the default one; --realtime with the two processes pinned to the last two CPUs (one
+# each); --realtime with both on the last CPU (wake-ups without an inter-processor interrupt).
+SCHEDULERS = ("default", "realtime", "realtime_1cpu")
+
+
+def scheduler_args(sched):
+    last = (os.cpu_count() or 1) - 1
+    return {"default": [], "realtime": ["--realtime"],
+            "realtime_1cpu": ["--realtime", "--cpus", f"{last},{last}"]}[sched]
+
+
+def measure(bin_dir, scene, out, rate, sched, hog, seconds):
+    tag = f"{rate:g}hz_{sched}_{'hog' if hog else 'quiet'}"
     hogs = [subprocess.Popen(["yes"], stdout=subprocess.DEVNULL)] if hog else []
     try:
-        rt = ["--realtime"] if realtime else []
+        rt = scheduler_args(sched)
         tj = os.path.join(out, f"transport_{tag}.json")
         if run([os.path.join(bin_dir, "bench", "transport_bench"), "--rate", f"{rate:g}", "--seconds", f"{seconds:g}",
                 "--out", tj] + rt, os.path.join(out, f"transport_{tag}.txt")) != 0:
@@ -53,7 +65,7 @@ def measure(bin_dir, scene, out, rate, realtime, hog, seconds):
     periods = t["round_trips"]
     loop_periods = s.get("states_published", 0) or 1
     return {
-        "tag": tag, "rate_hz": rate, "realtime": realtime, "hog": hog, "periods": periods,
+        "tag": tag, "rate_hz": rate, "scheduler": sched, "hog": hog, "periods": periods,
         "floor_wake_us": quantiles(t, "sleep_wake_late_us"), "floor_misses": t.get("sleep_deadline_misses"),
         "udp_us": quantiles(t, "udp_us"), "lcm_us": quantiles(t, "lcm_us"),
         "lcm_wake_us": quantiles(t, "lcm_wake_late_us"), "lcm_misses": t.get("lcm_deadline_misses"),
@@ -72,7 +84,9 @@ def report(rows, out, seconds):
              f"Written by `bench/transport/loop_vs_floor.py`; every row is one run of {seconds:g} s per path, all "
              "rows in one invocation. `floor`: a bare `clock_nanosleep` loop at the rate (cyclictest's method); "
              "`UDP`, `LCM`: bare round trips paced at the same rate and scheduling; `loop`: `gausstrack-run` (the "
-             "Duffing scene, plant and controller processes). Round trips and wake-up lateness in us (p50 / p99); "
+             "Duffing scene, plant and controller processes). Schedulers: `default`; `realtime` (SCHED_FIFO, "
+             "mlockall, the two processes pinned to the last two CPUs, one each); `realtime_1cpu` (the same, both "
+             "on the last CPU). Round trips and wake-up lateness in us (p50 / p99); "
              "misses: wake-ups more than half a period late.", "",
              "| rate | scheduler | load | floor wake | floor misses | UDP | LCM | loop | loop / LCM (p50) "
              "| loop wake | loop misses |", "|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -82,7 +96,7 @@ def report(rows, out, seconds):
             continue
         f, u, l, p, w = r["floor_wake_us"], r["udp_us"], r["lcm_us"], r["loop_us"], r["loop_wake_us"]
         lines.append(
-            f"| {r['rate_hz']:g} Hz | {'realtime' if r['realtime'] else 'default'} | {'1 hog' if r['hog'] else 'quiet'} "
+            f"| {r['rate_hz']:g} Hz | {r['scheduler']} | {'1 hog' if r['hog'] else 'quiet'} "
             f"| {f['p50']:.0f} / {f['p99']:.0f} | {r['floor_misses']} / {r['periods']} | {u['p50']:.0f} / {u['p99']:.0f} "
             f"| {l['p50']:.0f} / {l['p99']:.0f} | {p['p50']:.0f} / {p['p99']:.0f} | {ratio(p['p50'], l['p50']):.2f}x "
             f"| {w['p50']:.0f} / {w['p99']:.0f} | {r['loop_misses']} / {r['loop_periods']} |")
@@ -103,12 +117,12 @@ def report(rows, out, seconds):
         x = ratio(r["loop_wake_us"]["p99"], r["floor_wake_us"]["p99"])
         target("loop wake-up lateness <= 1.2x the floor's (p99)", case, f"{x:.2f}x", x <= 1.2)
     for r in ok_rows:
-        if r["realtime"]:
+        if r["scheduler"] != "default":
             continue
-        twin = [q for q in ok_rows if q["realtime"] and q["rate_hz"] == r["rate_hz"] and q["hog"] == r["hog"]]
-        if twin:
-            q = twin[0]
-            case = f"{r['rate_hz']:g} Hz, {'1 hog' if r['hog'] else 'quiet'}"
+        for q in ok_rows:
+            if q["scheduler"] == "default" or q["rate_hz"] != r["rate_hz"] or q["hog"] != r["hog"]:
+                continue
+            case = f"{r['rate_hz']:g} Hz, {'1 hog' if r['hog'] else 'quiet'}, {q['scheduler']}"
             worse_p50 = q["loop_us"]["p50"] > r["loop_us"]["p50"] * 1.05
             worse_miss = (q["loop_misses"] or 0) > (r["loop_misses"] or 0)
             target("--realtime never worse than the default scheduler (loop p50 within 5%, misses)", case,
@@ -127,13 +141,17 @@ def main(argv):
     p.add_argument("--seconds", type=float, default=5)
     p.add_argument("--rates", default="1000,10000")
     p.add_argument("--no-hog", action="store_true")
+    p.add_argument("--schedulers", default=",".join(SCHEDULERS), help="of " + ", ".join(SCHEDULERS))
     a = p.parse_args(argv)
+    schedulers = a.schedulers.split(",")
+    if any(x not in SCHEDULERS for x in schedulers):
+        p.error("--schedulers takes a list of " + ", ".join(SCHEDULERS))
     os.makedirs(a.out, exist_ok=True)
     rows = []
     for rate in [float(x) for x in a.rates.split(",")]:
-        for realtime in (False, True):
+        for sched in schedulers:
             for hog in (False,) if a.no_hog else (False, True):
-                rows.append(measure(a.bin_dir, a.scene, a.out, rate, realtime, hog, a.seconds))
+                rows.append(measure(a.bin_dir, a.scene, a.out, rate, sched, hog, a.seconds))
                 print(json.dumps(rows[-1]), flush=True)
     with open(os.path.join(a.out, "loop_vs_floor.json"), "w") as f:
         json.dump(rows, f, indent=1)

@@ -1,4 +1,5 @@
-// transport_bench [--round-trips N] [--rate HZ [--seconds S] [--realtime]] [--lcm-url URL] [--out FILE.json]
+// transport_bench [--round-trips N] [--rate HZ [--seconds S] [--realtime [--cpus A,B]]] [--lcm-url URL]
+//                 [--out FILE.json]
 // Round trip between two processes on this machine, in one run:
 //   lcm  a plant_state_t published over LCM, answered by a child process that decodes it and
 //        publishes a control_command_t (both encoded into fixed buffers, as the real processes do);
@@ -10,7 +11,8 @@
 //          later than half a period (the loop's deadline misses). The scheduler sets the timer
 //          slack to 1 ns, as it does in the plant.
 // --realtime applies what `gausstrack-run --realtime` applies: SCHED_FIFO 80, mlockall, the pacing
-// process pinned to the last CPU and the answering one to the one before.
+// process pinned to the last CPU and the answering one to the one before (--cpus A,B: the pacing
+// process on A, the answering one on B; A = B puts both on one CPU).
 // Prints p50/p99/p99.9/max of each and writes them as JSON.
 #include <arpa/inet.h>
 #include <lcm/lcm-cpp.hpp>
@@ -46,6 +48,7 @@ struct Pacing {
   double rate_hz = 0;
   bool realtime = false;
   int cpus = 1;
+  int pacing_cpu = -1, answering_cpu = -1;  // -1: the last CPU and the one before
   std::unique_ptr<PeriodScheduler> scheduler;
   void start(std::size_t periods) {
     if (rate_hz > 0)
@@ -61,7 +64,8 @@ struct Pacing {
     gausstrack::nodes::ProcessOptions o;
     o.rt_priority = 80;
     o.lock_memory = true;
-    o.cpu = pacing_side ? cpus - 1 : std::max(0, cpus - 2);
+    if (pacing_side) o.cpu = pacing_cpu >= 0 ? pacing_cpu : cpus - 1;
+    else o.cpu = answering_cpu >= 0 ? answering_cpu : std::max(0, cpus - 2);
     gausstrack::nodes::apply_realtime(o, "transport_bench");
   }
 };
@@ -237,11 +241,16 @@ int main(int argc, char** argv) {
     else if (a == "--rate" && i + 1 < argc) pacing.rate_hz = std::atof(argv[++i]);
     else if (a == "--seconds" && i + 1 < argc) seconds = std::atof(argv[++i]);
     else if (a == "--realtime") pacing.realtime = true;
+    else if (a == "--cpus" && i + 1 < argc) {
+      if (std::sscanf(argv[++i], "%d,%d", &pacing.pacing_cpu, &pacing.answering_cpu) != 2 ||
+          pacing.pacing_cpu < 0 || pacing.answering_cpu < 0)
+        return std::fprintf(stderr, "error: --cpus takes two CPU numbers A,B (e.g. 1,1)\n"), 2;
+    }
     else if (a == "--lcm-url" && i + 1 < argc) url = argv[++i];
     else if (a == "--out" && i + 1 < argc) out = argv[++i];
     else
-      return std::fprintf(stderr, "usage: %s [--round-trips N] [--rate HZ [--seconds S] [--realtime]] [--lcm-url URL] "
-                                  "[--out FILE.json]\n", argv[0]), 2;
+      return std::fprintf(stderr, "usage: %s [--round-trips N] [--rate HZ [--seconds S] [--realtime [--cpus A,B]]] "
+                                  "[--lcm-url URL] [--out FILE.json]\n", argv[0]), 2;
   }
   if (!(pacing.rate_hz >= 0) || pacing.rate_hz > 1e6 || !(seconds > 0))
     return std::fprintf(stderr, "error: --rate must be in [0, 1e6] Hz and --seconds positive\n"), 2;

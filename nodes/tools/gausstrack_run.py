@@ -7,13 +7,15 @@ whatever the pace, unlike a listener on the network, which can miss a burst.
 
 usage: gausstrack-run SCENE [--duration T] [--rate HZ] [--lockstep] [--log FILE] [--out DIR]
                       [--set key=value ...] [--lcm-url URL] [--channel-prefix P]
-                      [--realtime] [--watchdog-ms W] [--safe-action zero|hold] [--no-plots]
+                      [--realtime [--cpus PLANT,CONTROLLER]] [--watchdog-ms W]
+                      [--safe-action zero|hold] [--no-plots]
 
 The scene runs with sampled control at --rate (default 1000 Hz). DIR (default out/run/<scene>)
 receives trajectory.csv (the columns of gausstrack-sim), latency.csv, summary.json (the plant's
 run and loop statistics merged with the controller's), controller.json, the processes' logs and
 the plots. --realtime asks both processes for SCHED_FIFO, CPU pinning and mlockall (a warning
-when not permitted). Exit status: 0 when the run completed and both processes stopped cleanly.
+when not permitted); --cpus chooses the two CPUs (default: the last two, one each; the same CPU
+twice puts both processes on it). Exit status: 0 when the run completed and both processes stopped cleanly.
 """
 import argparse
 import json
@@ -45,6 +47,7 @@ def parse(argv):
     p.add_argument("--lcm-url", default="", help="default: LCM_DEFAULT_URL, else LCM's own")
     p.add_argument("--channel-prefix", default="GAUSSTRACK")
     p.add_argument("--realtime", action="store_true", help="SCHED_FIFO, pinning and mlockall")
+    p.add_argument("--cpus", metavar="PLANT,CONTROLLER", help="with --realtime: the CPUs to pin to")
     p.add_argument("--watchdog-ms", type=int, default=50)
     p.add_argument("--safe-action", choices=("zero", "hold"), default="zero")
     p.add_argument("--timeout-ms", type=int, default=2000, help="lock-step: longest wait for a command")
@@ -52,6 +55,15 @@ def parse(argv):
     args = p.parse_args(argv)
     if args.rate <= 0 or (args.duration is not None and args.duration <= 0):
         p.error("--rate and --duration must be positive")
+    if args.cpus is not None:
+        try:
+            args.cpus = [int(c) for c in args.cpus.split(",")]
+        except ValueError:
+            args.cpus = []
+        if len(args.cpus) != 2 or min(args.cpus) < 0:
+            p.error("--cpus takes two CPU numbers, PLANT,CONTROLLER (e.g. 1,1)")
+        if not args.realtime:
+            p.error("--cpus applies with --realtime")
     return args
 
 
@@ -115,8 +127,9 @@ def main(argv):
     cpus = os.cpu_count() or 1
     rt_plant, rt_controller = [], []
     if args.realtime:
-        rt_plant = ["--rt-priority", "80", "--lock-memory", "--cpu", str(cpus - 1)]
-        rt_controller = ["--rt-priority", "80", "--lock-memory", "--cpu", str(max(0, cpus - 2))]
+        plant_cpu, controller_cpu = args.cpus or (cpus - 1, max(0, cpus - 2))
+        rt_plant = ["--rt-priority", "80", "--lock-memory", "--cpu", str(plant_cpu)]
+        rt_controller = ["--rt-priority", "80", "--lock-memory", "--cpu", str(controller_cpu)]
 
     part_logs = []
     log_args = {"controller": [], "plant": []}

@@ -13,6 +13,14 @@
 set -euo pipefail
 bin=$1 scene=$2 work=$3 test_bin=$4
 rm -rf "$work" && mkdir -p "$work"
+# A malformed CPU placement is refused before anything starts, with what it expects.
+for bad in "--realtime --cpus 1" "--realtime --cpus 1,x" "--realtime --cpus -1,0" "--cpus 0,0"; do
+  # shellcheck disable=SC2086
+  if "$bin/gausstrack-run" "$scene" $bad --no-plots > "$work/bad.txt" 2>&1; then
+    echo "gausstrack-run accepted $bad" >&2; exit 1
+  fi
+  grep -q -- "--cpus" "$work/bad.txt" || { cat "$work/bad.txt" >&2; exit 1; }
+done
 prefix="REALTIME$$"
 "$bin/gausstrack-run" "$scene" --rate 1000 --duration 2 --set "tracking.stabilization={zeta: 1.0, omega: 20.0}" \
   --out "$work/run" --channel-prefix "$prefix" --realtime --no-plots --log "$work/run.lcmlog"
