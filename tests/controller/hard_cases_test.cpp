@@ -371,6 +371,32 @@ TEST(HardCases, UnverifiableResidualIsReported) {
   }
 }
 
+// Expectation: inconsistent rows are reported as not met when |D|^2 |q''|^2 overflows but the
+// answer does not (A = 1e300 I keeps B = D L^-T near 1e10 for D near 1e160): the test falls back
+// to norms taken without squaring instead of comparing against an infinite scale.
+TEST(HardCases, InconsistentRowsAreReportedWhenTheScaleOverflows) {
+  Eigen::Matrix<double, 2, 3> D;
+  D << 1, 2, 0, 1, 2, 0;  // the same row twice
+  D *= 1e160;
+  const Eigen::Vector2d g(1, 3);  // asking for two values of one quantity
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  const Eigen::Matrix3d A = 1e300 * Eigen::Matrix3d::Identity();
+  ASSERT_FALSE(std::isfinite(D.squaredNorm()));
+  for (InverseStrategy s : kStrategies) {
+    auto solver = solver_for<3, 2>(s);
+    ConstraintSolution<3, 2> sol;
+    ASSERT_EQ(solver.solve(A, zero, zero, D, g, sol), Status::kOk) << to_string(s);
+    expect_all_finite(sol);
+    EXPECT_TRUE(sol.diagnostics.has(warning::kConstraintsNotMet)) << to_string(s);
+    // Least squares meets the mean of the two: D q'' = (2, 2), residual |(1, -1)| = sqrt(2).
+    // (Undamped normal equations of two equal rows, which this solver_for gives kDampedLeastSquares,
+    // are singular up to rounding and promise no least-squares answer.)
+    if (s == InverseStrategy::kDampedLeastSquares) continue;
+    EXPECT_NEAR((D.row(0) * sol.acceleration)(0), 2.0, 1e-9) << to_string(s);
+    EXPECT_NEAR(sol.diagnostics.residual_norm, std::sqrt(2.0), 1e-9) << to_string(s);
+  }
+}
+
 // Found by fuzz_solver (it then reported a rank-0 answer, ok with an overflowing residual):
 // entries near the range limit for which B = D L^-T is finite but its complete orthogonal
 // decomposition is not. Expectation: kNonFiniteResult with zero outputs, not an answer.
@@ -386,6 +412,14 @@ TEST(HardCases, OverflowingDecompositionIsANonFiniteResult) {
   const Eigen::Vector3d f(0x1.a2a2a2a2a4d4dp-349, 0x1.a2a2a2a2a2a2ap-349, 0x1.a2a2a342a2a2ap-349);
   const Eigen::Vector3d Q(0x1.a2a0100feff2ap-349, 0x1.a2a2a2a2a2a2ap-349, -0x1.f2a2a2a2a2a34p+1008);
   const Eigen::Vector2d g(0x0.04d4d4d4d4d4dp-1022, 0x1.d00000080fe00p+213);
+  // The case is what it claims: B = D L^-T finite (L from an independent Cholesky of A), with a
+  // row whose squared norm overflows.
+  const Eigen::LLT<Eigen::Matrix3d> llt(A);
+  ASSERT_EQ(llt.info(), Eigen::Success);
+  Eigen::Matrix<double, 3, 2> bt = D.transpose();
+  llt.matrixL().solveInPlace(bt);
+  ASSERT_TRUE(bt.allFinite());
+  ASSERT_FALSE(std::isfinite(bt.col(0).squaredNorm()));
   auto solver = solver_for<3, 2>(InverseStrategy::kCompleteOrthogonal, -1, 0x0.00000004d0033p-1022);
   ConstraintSolution<3, 2> sol;
   EXPECT_EQ(solver.solve(A, f, Q, D, g, sol), Status::kNonFiniteResult);
@@ -562,55 +596,66 @@ TEST(Reuse, FailuresAndNewOptionsDropTheKeptFactorization) {
 
 // Found by fuzz_solver: when B = D A^(-1/2) or its factors overflow, the SVD refused its input
 // and left the previous call's singular values in place, so a solver that had solved another
-// system reported other warnings than a fresh one. Expectation: B itself overflowing is
-// kNonFiniteResult with zero outputs in every strategy and mass kind; B finite with norms that
-// overflow (D near the range limit) is either a finite answer or kNonFiniteResult; either way a
-// solver that solved a good system first answers bit for bit as a fresh one, and nothing
-// non-finite is kept for the next call.
+// system reported other warnings than a fresh one. Expectation, in every strategy and mass kind,
+// with and without a singular-value floor: a solver that solved a good system first answers bit
+// for bit as a fresh one, keeps nothing non-finite for the next call, and
+// - B itself overflowing (A = 1e-300 I, D near 1e200) is kNonFiniteResult with zero outputs;
+// - B finite with row norms beyond sqrt(DBL_MAX) (D near 1e300) is kNonFiniteResult too (the
+//   Householder reflections square them);
+// - B finite with a Gram matrix that overflows but rows that do not (D = 1e200 [I 0]) is answered:
+//   q''_i = g_i 1e-200 on the constrained coordinates and a_i = Q_i - f_i on the others (A = I);
+//   with a floor of 1e300 every direction is below it, so q'' = a.
 template <typename Solver>
-void expect_overflow_answered_as_fresh(const SolverOptions<double>& o, const Eigen::Matrix<double, 6, 6>& A,
-                                       const Eigen::Matrix<double, 3, 6>& D, bool b_overflows) {
+ConstraintSolution<6, 3> expect_answered_as_fresh(const SolverOptions<double>& o, const Eigen::Matrix<double, 6, 6>& A,
+                                                  const Eigen::Matrix<double, 3, 6>& D, Status expected) {
   RandomSource<double> rng(25);
   auto good = rng.system<6, 3>();
   good.A = A.diagonal().cwiseAbs().cwiseMax(1.0).asDiagonal();  // diagonal, for both kinds
   Solver kept(o), fresh(o);
   ConstraintSolution<6, 3> a, b, before;
-  ASSERT_EQ(kept.solve(good.A, good.f, good.Q, good.D, good.g, before), Status::kOk);
-  const Status st = kept.solve(A, good.f, good.Q, D, good.g, a);
-  EXPECT_EQ(fresh.solve(A, good.f, good.Q, D, good.g, b), st);
+  EXPECT_EQ(kept.solve(good.A, good.f, good.Q, good.D, good.g, before), Status::kOk);
+  EXPECT_EQ(kept.solve(A, good.f, good.Q, D, good.g, a), expected);
+  EXPECT_EQ(fresh.solve(A, good.f, good.Q, D, good.g, b), expected);
   expect_identical(a, b);
   expect_all_finite(a);
-  if (b_overflows) {
-    EXPECT_EQ(st, Status::kNonFiniteResult);
-  }
-  if (failed(st)) {
-    EXPECT_EQ(st, Status::kNonFiniteResult);
+  if (failed(expected)) {
     expect_all_zero(a);
+    EXPECT_EQ(a.diagnostics.warnings, 0u);
+    EXPECT_EQ(a.diagnostics.rank, 0);
   }
   // Back to the good system: the answer of the first call again.
-  ASSERT_EQ(kept.solve(good.A, good.f, good.Q, good.D, good.g, a), Status::kOk);
-  expect_identical(a, before);
+  EXPECT_EQ(kept.solve(good.A, good.f, good.Q, good.D, good.g, b), Status::kOk);
+  expect_identical(b, before);
+  return a;
 }
 
 TEST(HardCases, OverflowingFactorsAreANonFiniteResultNotStaleState) {
   RandomSource<double> rng(26);
   const Eigen::Matrix<double, 3, 6> D = rng.matrix<3, 6>();
+  Eigen::Matrix<double, 3, 6> unit_rows = Eigen::Matrix<double, 3, 6>::Zero();
+  unit_rows.leftCols<3>().setIdentity();
   const Eigen::Matrix<double, 6, 6> tiny_a = Eigen::Matrix<double, 6, 1>::Constant(1e-300).asDiagonal();
   const Eigen::Matrix<double, 6, 6> unit_a = Eigen::Matrix<double, 6, 6>::Identity();
+  using Dense = ConstraintSolver<6, 3>;
+  using Diagonal = ConstraintSolver<6, 3, double, MassMatrix::kDiagonal>;
+  const auto good = RandomSource<double>(25).system<6, 3>();  // the f, Q, g the helper uses
   for (InverseStrategy s : kStrategies) {
     for (double floor : {0.0, 1e300}) {  // a singular-value floor sends every strategy to the SVD
       SolverOptions<double> o;
       o.strategy = s;
       o.min_singular_value = floor;
       SCOPED_TRACE(std::string(to_string(s)) + (floor > 0 ? " with a floor" : ""));
-      // B = D / 1e-150 with entries near 1e200: overflows.
-      expect_overflow_answered_as_fresh<ConstraintSolver<6, 3>>(o, tiny_a, 1e200 * D, true);
-      expect_overflow_answered_as_fresh<ConstraintSolver<6, 3, double, MassMatrix::kDiagonal>>(o, tiny_a,
-                                                                                             1e200 * D, true);
-      // B = D finite near 1e300: its Gram matrix and column norms overflow.
-      expect_overflow_answered_as_fresh<ConstraintSolver<6, 3>>(o, unit_a, 1e300 * D, false);
-      expect_overflow_answered_as_fresh<ConstraintSolver<6, 3, double, MassMatrix::kDiagonal>>(o, unit_a,
-                                                                                             1e300 * D, false);
+      expect_answered_as_fresh<Dense>(o, tiny_a, 1e200 * D, Status::kNonFiniteResult);
+      expect_answered_as_fresh<Diagonal>(o, tiny_a, 1e200 * D, Status::kNonFiniteResult);
+      expect_answered_as_fresh<Dense>(o, unit_a, 1e300 * D, Status::kNonFiniteResult);
+      expect_answered_as_fresh<Diagonal>(o, unit_a, 1e300 * D, Status::kNonFiniteResult);
+      for (const auto& sol : {expect_answered_as_fresh<Dense>(o, unit_a, 1e200 * unit_rows, Status::kOk),
+                              expect_answered_as_fresh<Diagonal>(o, unit_a, 1e200 * unit_rows, Status::kOk)}) {
+        Eigen::Matrix<double, 6, 1> expected = good.Q - good.f;
+        if (floor == 0) expected.head<3>() = 1e-200 * good.g;
+        EXPECT_TRUE(sol.acceleration.isApprox(expected, 1e-12)) << sol.acceleration.transpose();
+        EXPECT_EQ(sol.diagnostics.rank, floor == 0 ? 3 : 0);
+      }
     }
   }
 }

@@ -113,7 +113,7 @@ struct SolveDiagnostics {
   Status status = Status::kOk;
   std::uint32_t warnings = 0;           ///< warning::* flags
   std::uint32_t non_finite_inputs = 0;  ///< input::* flags (with Status::kNonFiniteInput)
-  InverseStrategy strategy_used = InverseStrategy::kCholeskyWithFallback;
+  InverseStrategy strategy_used = InverseStrategy::kCholeskyWithFallback;  ///< the one asked for on failure
   int rank = 0;                         ///< numerical rank of D A^(-1/2)
   Scalar sigma_max = Scalar(0);         ///< largest singular value of D A^(-1/2)
   Scalar sigma_min_kept = Scalar(0);    ///< smallest singular value treated as nonzero
@@ -206,10 +206,7 @@ class ConstraintSolver {
       factor_diagnostics_ = SolveDiagnostics<Scalar>{};
       // B or its factors overflowed (entries near the range limit): nothing below could be
       // trusted, and a factorization of non-finite numbers is not kept.
-      if (!bt_.allFinite() || !factorize(factor_diagnostics_)) {
-        out.diagnostics.warnings = factor_diagnostics_.warnings;
-        return fail(out, Status::kNonFiniteResult);
-      }
+      if (!bt_.allFinite() || !factorize(factor_diagnostics_)) return fail(out, Status::kNonFiniteResult);
       factored_ = true;
     }
     diag = factor_diagnostics_;
@@ -238,16 +235,20 @@ class ConstraintSolver {
 
     // Squared norms: one square root (the reported residual), none for the scale.
     const Scalar residual2 = (D * out.acceleration - g).squaredNorm();
-    diag.residual_norm = std::sqrt(residual2);
     const Scalar scale2 = g.squaredNorm() + d_norm2_ * out.acceleration.squaredNorm();
-    const Scalar tolerance2 = options_.residual_tolerance * options_.residual_tolerance;
-    if (!std::isfinite(residual2)) {
-      // D q'' overflowed (entries near the range limit): the answer cannot be verified.
-      diag.residual_norm = std::numeric_limits<Scalar>::infinity();
-      diag.warnings |= warning::kConstraintsNotMet;
-    } else if (residual2 > tolerance2 * scale2) {
-      diag.warnings |= warning::kConstraintsNotMet;
+    bool met;
+    if (std::isfinite(residual2) && std::isfinite(scale2)) {
+      diag.residual_norm = std::sqrt(residual2);
+      met = !(residual2 > options_.residual_tolerance * options_.residual_tolerance * scale2);
+    } else {
+      // Squares beyond the range (norms from about 1e154): the same test on norms taken without
+      // squaring. A residual that is itself not finite (D q'' overflowed) cannot be verified.
+      diag.residual_norm = (D * out.acceleration - g).stableNorm();
+      met = std::isfinite(diag.residual_norm) &&
+            !(diag.residual_norm > options_.residual_tolerance * unsquared_scale(g, out.acceleration));
+      if (!std::isfinite(diag.residual_norm)) diag.residual_norm = std::numeric_limits<Scalar>::infinity();
     }
+    if (!met) diag.warnings |= warning::kConstraintsNotMet;
     if (diag.rank < P) diag.warnings |= warning::kRankDeficient;
     if (diag.condition_estimate > options_.warn_condition) diag.warnings |= warning::kIllConditioned;
     ready_ = true;
@@ -314,6 +315,12 @@ class ConstraintSolver {
     else mass_llt_.matrixU().solveInPlace(x);
   }
 
+  // |g| + |D| |q''| without squaring (for |D|^2 |q''|^2 beyond the range; rare, so not cached).
+  template <typename Dg>
+  Scalar unsquared_scale(const Eigen::MatrixBase<Dg>& g, const VectorN& acceleration) const noexcept {
+    return g.stableNorm() + d_key_.stableNorm() * acceleration.stableNorm();
+  }
+
   Status fail(Solution& out, Status status) noexcept {
     const VectorN zero = VectorN::Zero();
     out.acceleration = zero;
@@ -321,8 +328,12 @@ class ConstraintSolver {
     out.force_from_impressed = zero;
     out.force_from_rhs = zero;
     out.unconstrained_acceleration = zero;
+    // Only the status and the named inputs describe a failed call; the rest is reset.
+    const std::uint32_t bad = out.diagnostics.non_finite_inputs;
+    out.diagnostics = SolveDiagnostics<Scalar>{};
     out.diagnostics.status = status;
-    out.diagnostics.rank = 0;
+    out.diagnostics.non_finite_inputs = bad;
+    out.diagnostics.strategy_used = options_.strategy;
     return status;
   }
 
@@ -360,6 +371,7 @@ class ConstraintSolver {
   bool certainly_above_floor() noexcept {
     MatrixPP gram;
     gram.noalias() = bt_.transpose() * bt_;
+    if (!gram.allFinite()) return false;  // an overflowed Gram matrix would look well above it
     gram_llt_.compute(gram);
     if (gram_llt_.info() != Eigen::Success) return false;
     Scalar inverse_norm2(0);
@@ -394,6 +406,7 @@ class ConstraintSolver {
       MatrixPP gram;
       gram.noalias() = bt_.transpose() * bt_;
       gram.diagonal().array() += lambda2;
+      if (!gram.allFinite()) return false;  // overflowed: the SVD works on B itself
       gram_llt_.compute(gram);
       if (gram_llt_.info() != Eigen::Success) return false;
       const Scalar rcond = gram_llt_.rcond();
@@ -415,10 +428,10 @@ class ConstraintSolver {
     used_ = InverseStrategy::kSvd;
     householder_qr_of_bt();  // B^T = Q [R; 0]
     MatrixPP r = qr_.template topRows<P>().template triangularView<Eigen::Upper>();
-    // A non-finite R would leave the SVD's previous singular values in place (Eigen refuses it).
+    // Eigen's SVD refuses a non-finite R and keeps its previous singular values (and from then
+    // on reports InvalidInput for every input of the same size): R is checked here instead.
     if (!r.allFinite()) return false;
     svd_.compute(r, Eigen::ComputeFullU | Eigen::ComputeFullV);  // R = U S V^T
-    if (svd_.info() != Eigen::Success) return false;
     const auto& s = svd_.singularValues();
     rank_ = 0;
     if (s(0) > Scalar(0)) {
