@@ -27,6 +27,34 @@ def quantiles(doc, key):
     return {k: q.get(k, float("nan")) for k in ("p50", "p99", "p999", "max")}
 
 
+def softirq_snapshot():
+    """CPU time of the ksoftirqd threads (ms) and NET_RX softirqs run, all CPUs: packet delivery
+    that the kernel could not run at interrupt exit is deferred to ksoftirqd, an ordinary thread
+    that competes with everything else (e.g. a CPU hog)."""
+    ticks, hz = 0, os.sysconf("SC_CLK_TCK")
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit():
+            continue
+        try:
+            with open(f"/proc/{pid}/comm") as f:
+                if not f.read().startswith("ksoftirqd/"):
+                    continue
+            with open(f"/proc/{pid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            ticks += int(fields[11]) + int(fields[12])  # utime, stime
+        except (OSError, IndexError, ValueError):
+            continue
+    net_rx = 0
+    try:
+        with open("/proc/softirqs") as f:
+            for line in f:
+                if line.strip().startswith("NET_RX:"):
+                    net_rx = sum(int(x) for x in line.split()[1:])
+    except OSError:
+        pass
+    return 1000.0 * ticks / hz, net_rx
+
+
 # Schedulers: the default one; --realtime with the two processes pinned to the last two CPUs (one
 # each); --realtime with both on the last CPU (wake-ups without an inter-processor interrupt).
 SCHEDULERS = ("default", "realtime", "realtime_1cpu")
@@ -48,10 +76,12 @@ def measure(bin_dir, scene, out, rate, sched, hog, seconds):
                 "--out", tj] + rt, os.path.join(out, f"transport_{tag}.txt")) != 0:
             return {"tag": tag, "error": "transport_bench failed"}
         loop_dir = os.path.join(out, f"loop_{tag}")
+        softirq_before = softirq_snapshot()
         code = run([os.path.join(bin_dir, "bin", "gausstrack-run"), scene, "--rate", f"{rate:g}", "--duration",
                     f"{seconds:g}", "--set", "tracking.stabilization={zeta: 1.0, omega: 20.0}", "--out", loop_dir,
                     "--no-plots", "--channel-prefix", f"FLOOR{os.getpid()}"] + rt,
                    os.path.join(out, f"loop_{tag}.txt"))
+        softirq_after = softirq_snapshot()
         if code != 0:
             return {"tag": tag, "error": f"gausstrack-run exited {code}"}
     finally:
@@ -72,6 +102,7 @@ def measure(bin_dir, scene, out, rate, sched, hog, seconds):
         "loop_us": quantiles(s, "round_trip_us"), "loop_wake_us": quantiles(s, "wake_late_us"),
         "loop_misses": s.get("deadline_misses"), "loop_periods": loop_periods,
         "loop_missing": s.get("commands_missing"), "loop_max_error": s.get("max_tracking_error"),
+        "loop_ksoftirqd_ms": softirq_after[0] - softirq_before[0], "loop_net_rx": softirq_after[1] - softirq_before[1],
     }
 
 
@@ -87,19 +118,22 @@ def report(rows, out, seconds):
              "Duffing scene, plant and controller processes). Schedulers: `default`; `realtime` (SCHED_FIFO, "
              "mlockall, the two processes pinned to the last two CPUs, one each); `realtime_1cpu` (the same, both "
              "on the last CPU). Round trips and wake-up lateness in us (p50 / p99); "
-             "misses: wake-ups more than half a period late.", "",
+             "misses: wake-ups more than half a period late; ksoftirqd: CPU time of the kernel's deferred-softirq "
+             "threads during the loop's run (packet delivery the kernel put off to a thread), in ms, beside the "
+             "NET_RX softirqs run.", "",
              "| rate | scheduler | load | floor wake | floor misses | UDP | LCM | loop | loop / LCM (p50) "
-             "| loop wake | loop misses |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| loop wake | loop misses | ksoftirqd ms / NET_RX |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if "error" in r:
-            lines.append(f"| {r['tag']} | | | **{r['error']}** | | | | | | | |")
+            lines.append(f"| {r['tag']} | | | **{r['error']}** | | | | | | | | |")
             continue
         f, u, l, p, w = r["floor_wake_us"], r["udp_us"], r["lcm_us"], r["loop_us"], r["loop_wake_us"]
         lines.append(
             f"| {r['rate_hz']:g} Hz | {r['scheduler']} | {'1 hog' if r['hog'] else 'quiet'} "
             f"| {f['p50']:.0f} / {f['p99']:.0f} | {r['floor_misses']} / {r['periods']} | {u['p50']:.0f} / {u['p99']:.0f} "
             f"| {l['p50']:.0f} / {l['p99']:.0f} | {p['p50']:.0f} / {p['p99']:.0f} | {ratio(p['p50'], l['p50']):.2f}x "
-            f"| {w['p50']:.0f} / {w['p99']:.0f} | {r['loop_misses']} / {r['loop_periods']} |")
+            f"| {w['p50']:.0f} / {w['p99']:.0f} | {r['loop_misses']} / {r['loop_periods']} "
+            f"| {r.get('loop_ksoftirqd_ms', float('nan')):.0f} / {r.get('loop_net_rx', 0)} |")
     lines += ["", "## Targets", "", "| target | case | measured | met |", "|---|---|---|---|"]
 
     def target(label, case, text, ok):
