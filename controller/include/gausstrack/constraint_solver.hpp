@@ -318,7 +318,11 @@ class ConstraintSolver {
   // |g| + |D| |q''| without squaring (for |D|^2 |q''|^2 beyond the range; rare, so not cached).
   template <typename Dg>
   Scalar unsquared_scale(const Eigen::MatrixBase<Dg>& g, const VectorN& acceleration) const noexcept {
-    return g.stableNorm() + d_key_.stableNorm() * acceleration.stableNorm();
+    // Not d_key_.stableNorm(): Eigen 3.4.0 takes column 0 for every column of a fixed-size
+    // matrix there (and asserts in debug builds).
+    const Scalar d_max = d_key_.cwiseAbs().maxCoeff();
+    const Scalar d_norm = d_max > Scalar(0) ? d_max * (d_key_ / d_max).norm() : Scalar(0);
+    return g.stableNorm() + d_norm * acceleration.stableNorm();
   }
 
   Status fail(Solution& out, Status status) noexcept {
