@@ -15,6 +15,8 @@ import json
 import os
 import subprocess
 import sys
+import threading
+import time
 
 
 def run(cmd, log):
@@ -55,6 +57,71 @@ def softirq_snapshot():
     return 1000.0 * ticks / hz, net_rx
 
 
+def process_threads(prefix):
+    """Scheduling counters of each thread of the plant and controller processes started with the
+    channel prefix: CPU time and time spent runnable but waiting for a CPU (ms, from
+    /proc/PID/task/TID/schedstat), voluntary and involuntary context switches. The main thread is
+    the real-time loop; the others (the message log's writer) are summed as `other`."""
+    found = {}
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit():
+            continue
+        try:
+            with open(f"/proc/{pid}/cmdline", "rb") as f:
+                argv = f.read().split(b"\0")
+        except OSError:
+            continue
+        name = os.path.basename(argv[0].decode(errors="replace"))
+        role = {"gausstrack-plant": "plant", "gausstrack-controller": "controller"}.get(name)
+        if role is None or not any(prefix.encode() in a for a in argv):
+            continue
+        threads = {"main": [0.0, 0.0, 0, 0, 0], "other": [0.0, 0.0, 0, 0, 0]}
+        try:
+            for tid in os.listdir(f"/proc/{pid}/task"):
+                with open(f"/proc/{pid}/task/{tid}/schedstat") as f:
+                    run_ns, wait_ns, _ = (int(x) for x in f.read().split())
+                vol = invol = 0
+                with open(f"/proc/{pid}/task/{tid}/status") as f:
+                    for line in f:
+                        if line.startswith("voluntary_ctxt_switches:"):
+                            vol = int(line.split()[1])
+                        elif line.startswith("nonvoluntary_ctxt_switches:"):
+                            invol = int(line.split()[1])
+                t = threads["main" if tid == pid else "other"]
+                t[0] += run_ns / 1e6
+                t[1] += wait_ns / 1e6
+                t[2] += vol
+                t[3] += invol
+                t[4] += 1
+        except (OSError, ValueError):
+            continue
+        found[role] = {k: {"cpu_ms": v[0], "runqueue_wait_ms": v[1], "voluntary_switches": v[2],
+                           "involuntary_switches": v[3], "threads": v[4]} for k, v in threads.items()}
+    return found
+
+
+def run_watching_threads(cmd, log, prefix):
+    """run(), keeping the last process_threads(prefix) seen while cmd ran (the counters are
+    cumulative, so the last sample before the processes exit is the whole run, less at most the
+    polling interval)."""
+    last = {}
+    done = threading.Event()
+
+    def poll():
+        while not done.is_set():
+            for role, threads in process_threads(prefix).items():
+                last[role] = threads
+            done.wait(0.1)
+
+    poller = threading.Thread(target=poll, daemon=True)
+    poller.start()
+    try:
+        return run(cmd, log), last
+    finally:
+        done.set()
+        poller.join()
+
+
 # Schedulers: the default one; --realtime with the two processes pinned to the last two CPUs (one
 # each); --realtime with both on the last CPU (wake-ups without an inter-processor interrupt).
 SCHEDULERS = ("default", "realtime", "realtime_1cpu")
@@ -77,13 +144,17 @@ def measure(bin_dir, scene, out, rate, sched, hog, seconds):
             return {"tag": tag, "error": "transport_bench failed"}
         loop_dir = os.path.join(out, f"loop_{tag}")
         softirq_before = softirq_snapshot()
-        code = run([os.path.join(bin_dir, "bin", "gausstrack-run"), scene, "--rate", f"{rate:g}", "--duration",
-                    f"{seconds:g}", "--set", "tracking.stabilization={zeta: 1.0, omega: 20.0}", "--out", loop_dir,
-                    "--no-plots", "--channel-prefix", f"FLOOR{os.getpid()}"] + rt,
-                   os.path.join(out, f"loop_{tag}.txt"))
+        prefix = f"FLOOR{os.getpid()}"
+        code, threads = run_watching_threads(
+            [os.path.join(bin_dir, "bin", "gausstrack-run"), scene, "--rate", f"{rate:g}", "--duration",
+             f"{seconds:g}", "--set", "tracking.stabilization={zeta: 1.0, omega: 20.0}", "--out", loop_dir,
+             "--no-plots", "--channel-prefix", prefix] + rt,
+            os.path.join(out, f"loop_{tag}.txt"), prefix)
         softirq_after = softirq_snapshot()
         if code != 0:
             return {"tag": tag, "error": f"gausstrack-run exited {code}"}
+        if set(threads) != {"plant", "controller"}:
+            return {"tag": tag, "error": f"the loop's processes were not seen in /proc (saw {sorted(threads)})"}
     finally:
         for h in hogs:
             h.kill()
@@ -103,6 +174,7 @@ def measure(bin_dir, scene, out, rate, sched, hog, seconds):
         "loop_misses": s.get("deadline_misses"), "loop_periods": loop_periods,
         "loop_missing": s.get("commands_missing"), "loop_max_error": s.get("max_tracking_error"),
         "loop_ksoftirqd_ms": softirq_after[0] - softirq_before[0], "loop_net_rx": softirq_after[1] - softirq_before[1],
+        "loop_threads": threads,
     }
 
 
@@ -134,6 +206,27 @@ def report(rows, out, seconds):
             f"| {l['p50']:.0f} / {l['p99']:.0f} | {p['p50']:.0f} / {p['p99']:.0f} | {ratio(p['p50'], l['p50']):.2f}x "
             f"| {w['p50']:.0f} / {w['p99']:.0f} | {r['loop_misses']} / {r['loop_periods']} "
             f"| {r.get('loop_ksoftirqd_ms', float('nan')):.0f} / {r.get('loop_net_rx', 0)} |")
+    lines += ["", "## Where the loop's time goes: its threads", "",
+              "Per process, its real-time thread (`main`: the loop) and the rest (`other`: the message log's "
+              "writer), over the loop's run: CPU time, time runnable but waiting for a CPU (run-queue wait, from "
+              "schedstat) and involuntary context switches (preemptions), as ms / ms / count. A tail that the "
+              "run-queue wait does not explain is time the thread spent blocked (waiting for a message or a "
+              "lock), not time it was kept off a CPU.", "",
+              "| rate | scheduler | load | loop p99 | plant main | plant other | controller main | controller other |",
+              "|---|---|---|---|---|---|---|---|"]
+
+    def cell(r, role, kind):
+        t = (r.get("loop_threads") or {}).get(role, {}).get(kind)
+        if not t or not t["threads"]:
+            return ""
+        return f"{t['cpu_ms']:.0f} / {t['runqueue_wait_ms']:.1f} / {t['involuntary_switches']}"
+
+    for r in rows:
+        if "error" in r:
+            continue
+        lines.append(f"| {r['rate_hz']:g} Hz | {r['scheduler']} | {'1 hog' if r['hog'] else 'quiet'} "
+                     f"| {r['loop_us']['p99']:.0f} us | {cell(r, 'plant', 'main')} | {cell(r, 'plant', 'other')} "
+                     f"| {cell(r, 'controller', 'main')} | {cell(r, 'controller', 'other')} |")
     lines += ["", "## Targets", "", "| target | case | measured | met |", "|---|---|---|---|"]
 
     def target(label, case, text, ok):
