@@ -61,7 +61,7 @@ def process_threads(prefix):
     """Scheduling counters of each thread of the plant and controller processes started with the
     channel prefix: CPU time and time spent runnable but waiting for a CPU (ms, from
     /proc/PID/task/TID/schedstat), voluntary and involuntary context switches. The main thread is
-    the real-time loop; the others (the message log's writer) are summed as `other`."""
+    the real-time loop; the others (LCM's receive thread; the message log's writer when there is one) are summed as `other`."""
     found = {}
     for pid in os.listdir("/proc"):
         if not pid.isdigit():
@@ -207,8 +207,8 @@ def report(rows, out, seconds):
             f"| {w['p50']:.0f} / {w['p99']:.0f} | {r['loop_misses']} / {r['loop_periods']} "
             f"| {r.get('loop_ksoftirqd_ms', float('nan')):.0f} / {r.get('loop_net_rx', 0)} |")
     lines += ["", "## Where the loop's time goes: its threads", "",
-              "Per process, its real-time thread (`main`: the loop) and the rest (`other`: the message log's "
-              "writer), over the loop's run: CPU time, time runnable but waiting for a CPU (run-queue wait, from "
+              "Per process, its real-time thread (`main`: the loop) and the rest (`other`: here LCM's receive thread, which takes every incoming message off the socket for the loop; also the message log's "
+              "writer when a run keeps a log), over the loop's run: CPU time, time runnable but waiting for a CPU (run-queue wait, from "
               "schedstat) and involuntary context switches (preemptions), as ms / ms / count. A tail that the "
               "run-queue wait does not explain is time the thread spent blocked (waiting for a message or a "
               "lock), not time it was kept off a CPU.", "",

@@ -60,17 +60,18 @@ int plant_main(int argc, char** argv, std::vector<plant_sim::ModelFactory> model
     if (scene.control_mode != ControlMode::kSampled)
       throw SceneError(options.scene_path + ": the plant process needs control.mode: sampled (add --set "
                                             "control.mode=sampled --set control.rate=HZ)");
-    lcm::LCM lcm(options.lcm_url);
-    if (!lcm.good()) return std::fprintf(stderr, "error: cannot open LCM (%s)\n", options.lcm_url.c_str()), 1;
     node_options.rate_hz = scene.control_rate;
     node_options.periods = static_cast<std::size_t>(std::ceil(scene.duration * scene.control_rate)) + 16;
-    // Lock-step is not real time: its log waits for the disk rather than drop a message.
+    // The log's writer before the real-time options, LCM (and its receive thread) after them.
     const auto log = open_message_log(options.log_path);
+    stop_on_signals();
+    apply_realtime(options, "gausstrack-plant");
+    lcm::LCM lcm(options.lcm_url);
+    if (!lcm.good()) return std::fprintf(stderr, "error: cannot open LCM (%s)\n", options.lcm_url.c_str()), 1;
+    // Lock-step is not real time: its log waits for the disk rather than drop a message.
     Outbox state_out(lcm, options.state_channel, log.get(), node_options.lockstep || options.log_wait);
     Outbox stats_out(lcm, options.stats_channel, log.get(), true);
     PlantNode node(lcm, state_out, options.command_channel, scene.dof(), node_options);
-    stop_on_signals();
-    apply_realtime(options, "gausstrack-plant");
 
     RunOptions run_options;
     run_options.models = std::move(models);

@@ -23,7 +23,40 @@ for bad in "--realtime --cpus 1" "--realtime --cpus 1,x" "--realtime --cpus -1,0
 done
 prefix="REALTIME$$"
 "$bin/gausstrack-run" "$scene" --rate 1000 --duration 2 --set "tracking.stabilization={zeta: 1.0, omega: 20.0}" \
-  --out "$work/run" --channel-prefix "$prefix" --realtime --no-plots --log "$work/run.lcmlog"
+  --out "$work/run" --channel-prefix "$prefix" --realtime --no-plots --log "$work/run.lcmlog" &
+run=$!
+# While it runs: each process's threads with their scheduling policy (field 41 of the thread's
+# stat; 1 is SCHED_FIFO), kept from the last moment both processes had all three (the loop, LCM's
+# receive thread, the log's writer).
+: > "$work/threads.txt"
+while kill -0 "$run" 2> /dev/null; do
+  snapshot=""
+  for pid in $(pgrep -f -- "${prefix}_STATE" || true); do
+    for task in /proc/"$pid"/task/*; do
+      policy=$(sed 's/.*) //' "$task/stat" 2> /dev/null | awk '{ print $39 }') || true
+      [ -n "$policy" ] && snapshot+="$pid ${task##*/} $policy"$'\n'
+    done
+  done
+  [ "$(printf '%s' "$snapshot" | grep -c .)" -eq 6 ] && printf '%s' "$snapshot" > "$work/threads.txt"
+  sleep 0.05
+done
+wait "$run"
+/usr/bin/python3 - "$work/threads.txt" <<'PY'
+import collections, sys
+threads = collections.defaultdict(dict)
+for line in open(sys.argv[1]):
+    pid, tid, policy = line.split()
+    threads[pid][tid] = int(policy)
+assert len(threads) == 2, f"both processes' threads were not seen: {dict(threads)}"
+for pid, tasks in threads.items():
+    if tasks[pid] != 1:
+        print(f"process {pid}: SCHED_FIFO not permitted here, thread policies not checked")
+        continue
+    # The loop and LCM's receive thread (which hands it every message) real-time; the log's
+    # writer an ordinary thread (a late writer drops and counts, it never holds the loop).
+    assert sorted(tasks.values()) == [0, 1, 1], f"process {pid}: thread policies {tasks}"
+print("thread policies:", {pid: sorted(t.values()) for pid, t in threads.items()})
+PY
 "$test_bin/lcm_log_summary" "$work/run.lcmlog" > "$work/log.txt"
 /usr/bin/python3 - "$work/run/summary.json" "$work/log.txt" "$prefix" "$work/run/trajectory.csv" <<'PY'
 import csv, json, sys

@@ -59,16 +59,17 @@ inline int parse_controller_options(int argc, char** argv, ControllerProcessOpti
 template <Model M>
 int run_controller(const ControllerProcessOptions& o, const plant_sim::TrackingSpec& spec, M defaults = {}) {
   const ProcessOptions& p = o.process;
+  // The log's writer before the real-time options, LCM (and its receive thread) after them.
+  const auto log = open_message_log(p.log_path);
+  stop_on_signals();
+  apply_realtime(p, "gausstrack-controller");
   lcm::LCM lcm(p.lcm_url);  // empty: LCM_DEFAULT_URL or LCM's own default
   if (!lcm.good()) return std::fprintf(stderr, "error: cannot open LCM (%s)\n", p.lcm_url.c_str()), 1;
-  const auto log = open_message_log(p.log_path);
   Outbox commands(lcm, p.command_channel, log.get(), p.log_wait);
   Outbox diagnostics(lcm, p.diagnostics_channel, o.diagnostics ? log.get() : nullptr, p.log_wait);
   Outbox stats_outbox(lcm, p.stats_channel, log.get(), true);
   ControllerNode<M> node(plant_sim::make_controller<M>(spec, defaults), commands, o.diagnostics ? &diagnostics : nullptr);
   lcm.subscribe(p.state_channel, &ControllerNode<M>::on_state, &node);
-  stop_on_signals();
-  apply_realtime(p, "gausstrack-controller");
   std::printf("gausstrack-controller: ready (%s, %d coordinates, %d constraint rows)\n", spec.model.c_str(), M::kDof,
               M::kConstraints);
   std::fflush(stdout);

@@ -100,9 +100,13 @@ inline bool parse_common_option(int argc, char** argv, int& i, ProcessOptions& o
   return true;
 }
 
-/// Applies the real-time options asked for. What the system does not permit (no CAP_SYS_NICE,
-/// RLIMIT_MEMLOCK, a missing CPU) is a warning on stderr, not a failure: the loop still runs,
-/// only with worse wake-up latency.
+/// Applies the real-time options asked for to the calling thread and to the threads it creates
+/// afterwards (they inherit the policy and the CPU). The processes call it after opening their
+/// message log (its writer stays an ordinary thread: it may be late, the log then drops and counts)
+/// and before creating the lcm::LCM, whose receive thread hands every incoming message to the loop
+/// and so must not wait behind ordinary threads for a CPU. What the system does not permit (no
+/// CAP_SYS_NICE, RLIMIT_MEMLOCK, a missing CPU) is a warning on stderr, not a failure: the loop
+/// still runs, only with worse wake-up latency.
 inline void apply_realtime(const ProcessOptions& o, const char* program) {
   if (o.lock_memory && mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
     std::fprintf(stderr, "%s: warning: mlockall not permitted (%s); memory may page\n", program,
