@@ -57,25 +57,27 @@ def softirq_snapshot():
     return 1000.0 * ticks / hz, net_rx
 
 
-def process_threads(prefix):
+def process_threads(prefix, known):
     """Scheduling counters of each thread of the plant and controller processes started with the
     channel prefix: CPU time and time spent runnable but waiting for a CPU (ms, from
     /proc/PID/task/TID/schedstat), voluntary and involuntary context switches. The main thread is
     the real-time loop; the others (LCM's receive thread; the message log's writer when there is one) are summed as `other`."""
+    # `known` (pid -> role) spares a scan of every process once both are found.
+    if len(known) < 2:
+        for pid in os.listdir("/proc"):
+            if not pid.isdigit() or pid in known:
+                continue
+            try:
+                with open(f"/proc/{pid}/cmdline", "rb") as f:
+                    argv = f.read().split(b"\0")
+            except OSError:
+                continue
+            name = os.path.basename(argv[0].decode(errors="replace"))
+            role = {"gausstrack-plant": "plant", "gausstrack-controller": "controller"}.get(name)
+            if role is not None and f"{prefix}_STATE".encode() in argv:
+                known[pid] = role
     found = {}
-    for pid in os.listdir("/proc"):
-        if not pid.isdigit():
-            continue
-        try:
-            with open(f"/proc/{pid}/cmdline", "rb") as f:
-                argv = f.read().split(b"\0")
-        except OSError:
-            continue
-        name = os.path.basename(argv[0].decode(errors="replace"))
-        role = {"gausstrack-plant": "plant", "gausstrack-controller": "controller"}.get(name)
-        if role is None or not any(prefix.encode() in a for a in argv):
-            continue
-        threads = {"main": [0.0, 0.0, 0, 0, 0], "other": [0.0, 0.0, 0, 0, 0]}
+    for pid, role in known.items():
         try:
             for tid in os.listdir(f"/proc/{pid}/task"):
                 with open(f"/proc/{pid}/task/{tid}/schedstat") as f:
@@ -87,39 +89,49 @@ def process_threads(prefix):
                             vol = int(line.split()[1])
                         elif line.startswith("nonvoluntary_ctxt_switches:"):
                             invol = int(line.split()[1])
-                t = threads["main" if tid == pid else "other"]
-                t[0] += run_ns / 1e6
-                t[1] += wait_ns / 1e6
-                t[2] += vol
-                t[3] += invol
-                t[4] += 1
+                found[(role, pid, tid)] = (run_ns / 1e6, wait_ns / 1e6, vol, invol, tid == pid)
         except (OSError, ValueError):
             continue
-        found[role] = {k: {"cpu_ms": v[0], "runqueue_wait_ms": v[1], "voluntary_switches": v[2],
-                           "involuntary_switches": v[3], "threads": v[4]} for k, v in threads.items()}
     return found
+
+
+def summarize_threads(seen):
+    """Per role, the main thread and the others summed, from each thread's last counters seen."""
+    out = {}
+    for (role, _, _), (cpu, wait, vol, invol, main) in seen.items():
+        t = out.setdefault(role, {k: {"cpu_ms": 0.0, "runqueue_wait_ms": 0.0, "voluntary_switches": 0,
+                                      "involuntary_switches": 0, "threads": 0} for k in ("main", "other")})
+        c = t["main" if main else "other"]
+        c["cpu_ms"] += cpu
+        c["runqueue_wait_ms"] += wait
+        c["voluntary_switches"] += vol
+        c["involuntary_switches"] += invol
+        c["threads"] += 1
+    return out
 
 
 def run_watching_threads(cmd, log, prefix):
     """run(), keeping the last process_threads(prefix) seen while cmd ran (the counters are
     cumulative, so the last sample before the processes exit is the whole run, less at most the
     polling interval)."""
-    last = {}
+    seen, known = {}, {}
     done = threading.Event()
 
     def poll():
         while not done.is_set():
-            for role, threads in process_threads(prefix).items():
-                last[role] = threads
+            # Counters only grow: each thread's latest reading is its whole run so far, and a thread
+            # that has ended (LCM's, joined at exit) keeps its last one.
+            seen.update(process_threads(prefix, known))
             done.wait(0.1)
 
     poller = threading.Thread(target=poll, daemon=True)
     poller.start()
     try:
-        return run(cmd, log), last
+        code = run(cmd, log)
     finally:
         done.set()
         poller.join()
+    return code, summarize_threads(seen)
 
 
 # Schedulers: the default one; --realtime with the two processes pinned to the last two CPUs (one

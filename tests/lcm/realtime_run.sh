@@ -25,9 +25,10 @@ prefix="REALTIME$$"
 "$bin/gausstrack-run" "$scene" --rate 1000 --duration 2 --set "tracking.stabilization={zeta: 1.0, omega: 20.0}" \
   --out "$work/run" --channel-prefix "$prefix" --realtime --no-plots --log "$work/run.lcmlog" &
 run=$!
+trap 'kill "$run" 2> /dev/null || true' EXIT
 # While it runs: each process's threads with their scheduling policy (field 41 of the thread's
 # stat; 1 is SCHED_FIFO), kept from the last moment both processes had all three (the loop, LCM's
-# receive thread, the log's writer).
+# receive thread, the log's writer) or more.
 : > "$work/threads.txt"
 while kill -0 "$run" 2> /dev/null; do
   snapshot=""
@@ -37,7 +38,8 @@ while kill -0 "$run" 2> /dev/null; do
       [ -n "$policy" ] && snapshot+="$pid ${task##*/} $policy"$'\n'
     done
   done
-  [ "$(printf '%s' "$snapshot" | grep -c .)" -eq 6 ] && printf '%s' "$snapshot" > "$work/threads.txt"
+  counts=$(printf '%s' "$snapshot" | awk 'NF { n[$1]++ } END { k = 0; for (p in n) if (n[p] >= 3) k++; print k }')
+  [ "$counts" -eq 2 ] && printf '%s' "$snapshot" > "$work/threads.txt"
   sleep 0.05
 done
 wait "$run"
@@ -54,7 +56,8 @@ for pid, tasks in threads.items():
         continue
     # The loop and LCM's receive thread (which hands it every message) real-time; the log's
     # writer an ordinary thread (a late writer drops and counts, it never holds the loop).
-    assert sorted(tasks.values()) == [0, 1, 1], f"process {pid}: thread policies {tasks}"
+    policies = sorted(tasks.values())
+    assert policies.count(0) == 1 and policies.count(1) >= 2, f"process {pid}: thread policies {tasks}"
 print("thread policies:", {pid: sorted(t.values()) for pid, t in threads.items()})
 PY
 "$test_bin/lcm_log_summary" "$work/run.lcmlog" > "$work/log.txt"
