@@ -27,9 +27,11 @@
 //
 // Strategies for y = B^+ r (all allocation-free for fixed sizes):
 // - kCholeskyWithFallback (default): normal equations, y = B^T (B B^T)^-1 r with B B^T = D A^-1 D^T
-//   factored by LLT. Exact Moore-Penrose answer when rank(D) = P. Its rounding error grows like
-//   eps * cond(B)^2, so when LLT fails or its reciprocal condition estimate falls below
-//   `fallback_rcond` the call answers by kSvd instead and sets warning::kFellBackToSvd.
+//   factored by Cholesky. Exact Moore-Penrose answer when rank(D) = P. Its rounding error grows
+//   like eps * cond(B)^2, so when the Cholesky factorization fails or its reciprocal condition
+//   bound 1 / (||G||_1 ||L_G^-1||_F^2) (G = B B^T = L_G L_G^T; never above the true reciprocal
+//   condition number) falls below `fallback_rcond` the call answers by kSvd instead and sets
+//   warning::kFellBackToSvd.
 // - kSvd: Moore-Penrose inverse by SVD: Householder QR B^T = Q [R; 0], then two-sided Jacobi SVD
 //   of the square P x P factor R = U S V^T (the singular values of B), so B^+ = Q_1 U S^+ V^T.
 //   Singular values sigma_i <= rank_tolerance * sigma_max are treated as zero.
@@ -43,7 +45,6 @@
 //   (falling back to kSvd when singular).
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -53,6 +54,7 @@
 #include <limits>
 
 #include "gausstrack/mass_matrix.hpp"
+#include "gausstrack/small_dense.hpp"
 #include "gausstrack/status.hpp"
 
 namespace gausstrack {
@@ -84,8 +86,8 @@ struct SolverOptions {
   /// sigma_i > rank_tolerance * sigma_max. A value <= 0 selects max(N, P) * eps, the LAPACK and
   /// MATLAB `rank` convention.
   Scalar rank_tolerance = Scalar(-1);
-  /// The Cholesky path answers only when the reciprocal condition estimate of D A^-1 D^T is at
-  /// least this: cond(D A^(-1/2)) up to about 1e3 for double (normal-equations error
+  /// The Cholesky path answers only when a lower bound on the reciprocal condition number of
+  /// D A^-1 D^T (at most P^1.5 times below it) is at least this: cond(D A^(-1/2)) up to about 1e3 for double (normal-equations error
   /// eps * cond^2 below about 2e-10), about 30 for float.
   Scalar fallback_rcond = std::numeric_limits<Scalar>::digits > 24 ? Scalar(1e-6) : Scalar(1e-3);
   /// lambda of kDampedLeastSquares, in the units of the singular values of D A^(-1/2).
@@ -107,7 +109,9 @@ struct SolverOptions {
 };
 
 /// Diagnostics of one solve. Singular values are those of B = D L^-T, which equal those of
-/// D A^(-1/2): exact for kSvd, estimates from a triangular factor's diagonal otherwise.
+/// D A^(-1/2): exact for kSvd; for the normal equations bounds from their Cholesky factor
+/// (sigma_max from above, sigma_min_kept from below, so the condition estimate is never low);
+/// for kCompleteOrthogonal estimates from its triangular factor's diagonal.
 template <typename Scalar>
 struct SolveDiagnostics {
   Status status = Status::kOk;
@@ -153,13 +157,7 @@ class ConstraintSolver {
   using Solution = ConstraintSolution<N, P, Scalar>;
   using Options = SolverOptions<Scalar>;
 
-  explicit ConstraintSolver(const Options& options = Options{}) noexcept {
-    set_options(options);
-    // Eigen's default-constructed LLT leaves its status unset, and copying the solver would copy
-    // that indeterminate value: factor identities once so every member is defined.
-    mass_llt_.compute(MatrixNN::Identity());
-    gram_llt_.compute(MatrixPP::Identity());
-  }
+  explicit ConstraintSolver(const Options& options = Options{}) noexcept { set_options(options); }
 
   void set_options(const Options& options) noexcept {
     factored_ = false;
@@ -215,7 +213,7 @@ class ConstraintSolver {
     out.unconstrained_acceleration = Q - f;
     solve_mass_in_place(out.unconstrained_acceleration);
     Eigen::Matrix<Scalar, P, 2> rhs;
-    rhs.col(0).noalias() = -(D * out.unconstrained_acceleration);
+    rhs.col(0).noalias() = -(D.lazyProduct(out.unconstrained_acceleration));
     rhs.col(1) = g;
     Eigen::Matrix<Scalar, N, 2> y;
     apply_pseudo_inverse(rhs, y);
@@ -234,7 +232,7 @@ class ConstraintSolver {
     }
 
     // Squared norms: one square root (the reported residual), none for the scale.
-    const Scalar residual2 = (D * out.acceleration - g).squaredNorm();
+    const Scalar residual2 = (D.lazyProduct(out.acceleration) - g).squaredNorm();
     const Scalar scale2 = g.squaredNorm() + d_norm2_ * out.acceleration.squaredNorm();
     bool met;
     if (std::isfinite(residual2) && std::isfinite(scale2)) {
@@ -288,8 +286,8 @@ class ConstraintSolver {
       return true;
     } else {
       mass_key_ = A;
-      mass_llt_.compute(mass_key_);
-      return mass_llt_.info() == Eigen::Success;
+      mass_l_ = mass_key_;
+      return small_dense::cholesky_in_place(mass_l_);
     }
   }
   template <typename DD>
@@ -298,21 +296,24 @@ class ConstraintSolver {
       bt_.noalias() = inverse_sqrt_mass_.asDiagonal() * D.transpose();
     } else {
       bt_ = D.transpose();
-      mass_llt_.matrixL().solveInPlace(bt_);
+      small_dense::solve_lower_in_place(mass_l_, bt_);
     }
   }
   void solve_mass_in_place(VectorN& x) const noexcept {  // x = A^-1 x
     if constexpr (kMass == MassMatrix::kDiagonal) x.array() *= inverse_mass_.array();
-    else mass_llt_.solveInPlace(x);
+    else {
+      small_dense::solve_lower_in_place(mass_l_, x);
+      small_dense::solve_lower_transposed_in_place(mass_l_, x);
+    }
   }
-  template <typename Derived>
-  void apply_l_in_place(Eigen::MatrixBase<Derived>& x) const noexcept {  // x = L x
+  template <int K>
+  void apply_l_in_place(Eigen::Matrix<Scalar, N, K>& x) const noexcept {  // x = L x
     if constexpr (kMass == MassMatrix::kDiagonal) x = sqrt_mass_.asDiagonal() * x;
-    else x = mass_llt_.matrixL() * x;
+    else small_dense::multiply_lower_in_place(mass_l_, x);
   }
   void solve_lt_in_place(VectorN& x) const noexcept {  // x = L^-T x
     if constexpr (kMass == MassMatrix::kDiagonal) x.array() *= inverse_sqrt_mass_.array();
-    else mass_llt_.matrixU().solveInPlace(x);
+    else small_dense::solve_lower_transposed_in_place(mass_l_, x);
   }
 
   // |g| + |D| |q''| without squaring (for |D|^2 |q''|^2 beyond the range; rare, so not cached).
@@ -373,19 +374,24 @@ class ConstraintSolver {
   // B B^T = L L^T, sigma_min(B)^2 = lambda_min(B B^T) = 1 / ||L^-1||_2^2 >= 1 / ||L^-1||_F^2.
   // A sufficient test (it may send a solve to the SVD needlessly, never the other way round).
   bool certainly_above_floor() noexcept {
-    MatrixPP gram;
-    gram.noalias() = bt_.transpose() * bt_;
-    if (!gram.allFinite()) return false;  // an overflowed Gram matrix would look well above it
-    gram_llt_.compute(gram);
-    if (gram_llt_.info() != Eigen::Success) return false;
-    Scalar inverse_norm2(0);
-    for (int j = 0; j < P; ++j) {
-      VectorP column = VectorP::Unit(j);
-      gram_llt_.matrixL().solveInPlace(column);
-      inverse_norm2 += column.squaredNorm();
-    }
+    Scalar norm1, inverse_norm2;
+    if (!factor_gram(Scalar(0), norm1, inverse_norm2)) return false;
     const Scalar floor = options_.min_singular_value;
     return std::isfinite(inverse_norm2) && inverse_norm2 * floor * floor <= Scalar(1);
+  }
+
+  // G = B B^T + lambda2 I = L L^T: keeps L^-1 (gram_l_inv_) and gives ||G||_1 and ||L^-1||_F^2.
+  // False when G is not finite (an overflowed Gram matrix would look well conditioned) or its
+  // Cholesky factorization fails.
+  bool factor_gram(Scalar lambda2, Scalar& norm1, Scalar& inverse_norm2) noexcept {
+    MatrixPP gram;
+    gram.noalias() = bt_.transpose().lazyProduct(bt_);  // coefficient-based: no blocked product
+    gram.diagonal().array() += lambda2;
+    if (!gram.allFinite()) return false;
+    norm1 = gram.cwiseAbs().colwise().sum().maxCoeff();
+    if (!small_dense::cholesky_in_place(gram)) return false;
+    inverse_norm2 = small_dense::invert_lower(gram, gram_l_inv_);
+    return true;
   }
 
 
@@ -407,23 +413,22 @@ class ConstraintSolver {
       diag.condition_estimate = Scalar(1);
       return true;
     } else {
-      MatrixPP gram;
-      gram.noalias() = bt_.transpose() * bt_;
-      gram.diagonal().array() += lambda2;
-      if (!gram.allFinite()) return false;  // overflowed: the SVD works on B itself
-      gram_llt_.compute(gram);
-      if (gram_llt_.info() != Eigen::Success) return false;
-      const Scalar rcond = gram_llt_.rcond();
+      // Not usable when G overflowed (the SVD then works on B itself) or is not positive definite.
+      Scalar norm1, inverse_norm2;
+      if (!factor_gram(lambda2, norm1, inverse_norm2)) return false;
+      // lambda_max(G) <= ||G||_1 and 1 / lambda_min(G) = ||L^-1||_2^2 <= ||L^-1||_F^2, so this is
+      // never above G's true reciprocal condition number (and at most P^1.5 times below it): an
+      // ill-conditioned G always falls back.
+      const Scalar rcond = Scalar(1) / (norm1 * inverse_norm2);
       if (require_well_conditioned && !(rcond >= options_.fallback_rcond)) return false;
-      if (!(rcond > Scalar(0))) return false;
+      if (!(rcond > Scalar(0)) || !std::isfinite(rcond)) return false;
       used_ = options_.strategy;
       rank_ = P;
-      const auto d = gram_llt_.matrixLLT().diagonal();
       diag.strategy_used = used_;
       diag.rank = P;
-      diag.sigma_max = d.maxCoeff();
-      diag.sigma_min_kept = d.minCoeff();
-      diag.condition_estimate = Scalar(1) / std::sqrt(rcond);
+      diag.sigma_max = std::sqrt(norm1);                        // >= sigma_max
+      diag.sigma_min_kept = Scalar(1) / std::sqrt(inverse_norm2);  // <= sigma_min
+      diag.condition_estimate = diag.sigma_max / diag.sigma_min_kept;
       return true;
     }
   }
@@ -495,11 +500,12 @@ class ConstraintSolver {
       case InverseStrategy::kCholeskyWithFallback:
       case InverseStrategy::kDampedLeastSquares: {
         if constexpr (P == 1) {
-          y.noalias() = bt_ * (r * inverse_gram_);
+          y.noalias() = bt_.lazyProduct(r * inverse_gram_);
         } else {
-          Eigen::Matrix<Scalar, P, K> w = r;
-          gram_llt_.solveInPlace(w);
-          y.noalias() = bt_ * w;
+          Eigen::Matrix<Scalar, P, K> w = r;  // w = G^-1 r = L^-T L^-1 r
+          small_dense::multiply_lower_in_place(gram_l_inv_, w);
+          small_dense::multiply_lower_transposed_in_place(gram_l_inv_, w);
+          y.noalias() = bt_.lazyProduct(w);
         }
         return;
       }
@@ -569,10 +575,10 @@ class ConstraintSolver {
   Scalar d_norm2_ = Scalar(0);              // ||D||_F^2
   Scalar inverse_gram_ = Scalar(0);         // 1 / (B B^T + lambda^2) when P = 1
   SolveDiagnostics<Scalar> factor_diagnostics_;  // what factorize reported
-  Eigen::LLT<MatrixNN> mass_llt_;
+  MatrixNN mass_l_ = MatrixNN::Identity();  // A = L L^T, lower triangle (dense)
   MatrixNP bt_ = MatrixNP::Zero();  // B^T = L^-1 D^T
   MatrixPN b_ = MatrixPN::Zero();   // B, for the COD
-  Eigen::LLT<MatrixPP> gram_llt_;
+  MatrixPP gram_l_inv_ = MatrixPP::Identity();  // L^-1 for B B^T + lambda^2 I = L L^T
   MatrixNP qr_ = MatrixNP::Zero();  // B^T = Q [R; 0]: R above, reflectors below the diagonal
   VectorP qr_tau_ = VectorP::Zero();
   Eigen::JacobiSVD<MatrixPP, Eigen::NoQRPreconditioner> svd_;  // R = U S V^T

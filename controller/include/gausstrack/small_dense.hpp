@@ -1,0 +1,138 @@
+// Dense kernels for the solver's compile-time sizes: Cholesky factorization, triangular solves,
+// products and inverse, written as plain loops over column-major storage.
+//
+// Why not Eigen's LLT and triangularView: at the sizes a controller has (2 to about 32) Eigen sends
+// these operations through its blocked, dynamic-size paths (packing, run-time block sizes), whose
+// overhead is most of the cost, and Eigen's LLT::rcond runs an iterative 1-norm estimator (several
+// triangular solves) on every factorization. Each loop here runs down one contiguous column, so
+// the compiler unrolls and vectorizes it for the fixed size; nothing allocates or throws.
+// Only the lower triangle of a factor is read or written.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+
+namespace gausstrack::small_dense {
+
+/// In place, the lower triangle of the symmetric positive definite `m` (its upper triangle is not
+/// read) becomes L with m = L L^T. Right-looking: step k scales column k and updates the columns
+/// to its right. Returns false, as Eigen's LLT does, when a pivot is <= 0 (not positive definite);
+/// a NaN pivot is not detected here (the factor comes out non-finite; the caller checks that).
+template <typename Scalar, int N>
+bool cholesky_in_place(Eigen::Matrix<Scalar, N, N>& m) noexcept {
+  Scalar* a = m.data();
+  for (int k = 0; k < N; ++k) {
+    Scalar* ck = a + k * N;
+    if (ck[k] <= Scalar(0)) return false;
+    const Scalar d = std::sqrt(ck[k]);
+    const Scalar inverse = Scalar(1) / d;
+    ck[k] = d;
+    for (int i = k + 1; i < N; ++i) ck[i] *= inverse;
+    for (int j = k + 1; j < N; ++j) {
+      Scalar* cj = a + j * N;
+      const Scalar ljk = ck[j];
+      for (int i = j; i < N; ++i) cj[i] -= ck[i] * ljk;
+    }
+  }
+  return true;
+}
+
+/// x = L^-1 x for every column of x (forward substitution, column-oriented).
+template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
+void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l,
+                          Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
+  static_assert(!(Options & Eigen::RowMajor) || K == 1, "column-major right sides");
+  const Scalar* a = l.data();
+  Scalar inverse[N];  // independent divisions up front: only multiplications on the dependent path
+  for (int k = 0; k < N; ++k) inverse[k] = Scalar(1) / a[k * N + k];
+  for (int k = 0; k < N; ++k) {  // step k for every column: independent chains side by side
+    const Scalar* ck = a + k * N;
+    for (int c = 0; c < K; ++c) {
+      Scalar* xc = x.data() + c * N;
+      const Scalar v = xc[k] * inverse[k];
+      xc[k] = v;
+      for (int i = k + 1; i < N; ++i) xc[i] -= ck[i] * v;
+    }
+  }
+}
+
+/// x = L^-T x for every column of x (back substitution: dot products down L's columns).
+template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
+void solve_lower_transposed_in_place(const Eigen::Matrix<Scalar, N, N>& l,
+                                     Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
+  static_assert(!(Options & Eigen::RowMajor) || K == 1, "column-major right sides");
+  const Scalar* a = l.data();
+  Scalar inverse[N];
+  for (int k = 0; k < N; ++k) inverse[k] = Scalar(1) / a[k * N + k];
+  for (int c = 0; c < K; ++c) {
+    Scalar* xc = x.data() + c * N;
+    for (int k = N - 1; k >= 0; --k) {
+      const Scalar* ck = a + k * N;
+      Scalar s = xc[k];
+      for (int i = k + 1; i < N; ++i) s -= ck[i] * xc[i];
+      xc[k] = s * inverse[k];
+    }
+  }
+}
+
+/// x = L x for every column of x. Step k (from the last) reads x_k before any later step changes
+/// it, so the product runs in place down L's columns.
+template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
+void multiply_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l,
+                             Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
+  static_assert(!(Options & Eigen::RowMajor) || K == 1, "column-major right sides");
+  const Scalar* a = l.data();
+  for (int c = 0; c < K; ++c) {
+    Scalar* xc = x.data() + c * N;
+    for (int k = N - 1; k >= 0; --k) {
+      const Scalar* ck = a + k * N;
+      const Scalar v = xc[k];
+      xc[k] = ck[k] * v;
+      for (int i = k + 1; i < N; ++i) xc[i] += ck[i] * v;
+    }
+  }
+}
+
+/// x = L^T x for every column of x (dot products down L's columns, first row first).
+template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
+void multiply_lower_transposed_in_place(const Eigen::Matrix<Scalar, N, N>& l,
+                                        Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
+  static_assert(!(Options & Eigen::RowMajor) || K == 1, "column-major right sides");
+  const Scalar* a = l.data();
+  for (int c = 0; c < K; ++c) {
+    Scalar* xc = x.data() + c * N;
+    for (int k = 0; k < N; ++k) {
+      const Scalar* ck = a + k * N;
+      Scalar s(0);
+      for (int i = k; i < N; ++i) s += ck[i] * xc[i];
+      xc[k] = s;
+    }
+  }
+}
+
+/// The lower triangle of `inverse` becomes L^-1 (its upper triangle zero); returns the sum of
+/// squares of L^-1's entries, ||L^-1||_F^2.
+template <typename Scalar, int N>
+Scalar invert_lower(const Eigen::Matrix<Scalar, N, N>& l, Eigen::Matrix<Scalar, N, N>& inverse) noexcept {
+  const Scalar* a = l.data();
+  Scalar* z = inverse.data();
+  Scalar sum(0);
+  Scalar reciprocal[N];
+  for (int k = 0; k < N; ++k) reciprocal[k] = Scalar(1) / a[k * N + k];
+  for (int c = 0; c < N; ++c) {  // column c of L^-1 solves L z = e_c; its rows above c are zero
+    Scalar* zc = z + c * N;
+    for (int i = 0; i < c; ++i) zc[i] = Scalar(0);
+    zc[c] = Scalar(1);
+    for (int i = c + 1; i < N; ++i) zc[i] = Scalar(0);
+    for (int k = c; k < N; ++k) {
+      const Scalar* ck = a + k * N;
+      const Scalar v = zc[k] * reciprocal[k];
+      zc[k] = v;
+      sum += v * v;
+      for (int i = k + 1; i < N; ++i) zc[i] -= ck[i] * v;
+    }
+  }
+  return sum;
+}
+
+}  // namespace gausstrack::small_dense
