@@ -552,6 +552,51 @@ TEST(HardCases, FallbackThresholdAboveOneAlwaysFallsBack) {
   expect_threshold_above_one_falls_back<6, 3>();
 }
 
+// Expectation: the normal equations' condition estimate is a bound, never optimistic: for D
+// A^(-1/2) with prescribed singular values (condition 1 to 1e6), the estimate lies between the
+// SVD's exact condition number and P^1.5 times it, sigma_max from above and sigma_min from below
+// (up to the rounding of a Gram matrix of condition up to 1e12);
+// the call falls back to the SVD whenever the exact cond(B)^2 is beyond 1 / fallback_rcond, and
+// answers by the normal equations whenever the bound is within it.
+template <int N, int P>
+void expect_condition_bound() {
+  RandomSource<double> rng(31);
+  SolverOptions<double> o;
+  o.fallback_rcond = 0.0;  // no fallback: the bound is reported at every condition
+  auto exact = solver_for<N, P>(InverseStrategy::kSvd);
+  ConstraintSolver<N, P> bound(o);
+  ConstraintSolver<N, P> fallback;  // default threshold
+  ConstraintSolution<N, P> e, b, d;
+  for (int it = 0; it < 200; ++it) {
+    const double cond = std::pow(10.0, rng.uniform(0.0, 6.0));
+    const double tol = 1e-9 + 100 * std::numeric_limits<double>::epsilon() * cond * cond;
+    Eigen::Matrix<double, P, 1> sigma;
+    for (int i = 0; i < P; ++i) sigma(i) = std::pow(cond, -double(i) / std::max(P - 1, 1));
+    auto sys = rng.template system<N, P>();
+    const Eigen::LLT<Eigen::Matrix<double, N, N>> llt(sys.A);
+    // D = S L^T, so B = D L^-T = S has exactly these singular values.
+    sys.D = rng.template with_singular_values<P, N>(sigma) * Eigen::Matrix<double, N, N>(llt.matrixU());
+    ASSERT_EQ(exact.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, e), Status::kOk);
+    ASSERT_EQ(bound.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, b), Status::kOk);
+    ASSERT_EQ(fallback.solve(sys.A, sys.f, sys.Q, sys.D, sys.g, d), Status::kOk);
+    const double true_cond = e.diagnostics.condition_estimate;
+    ASSERT_FALSE(b.diagnostics.has(warning::kFellBackToSvd));
+    EXPECT_GE(b.diagnostics.condition_estimate, true_cond * (1 - tol)) << "it " << it;
+    EXPECT_LE(b.diagnostics.condition_estimate, true_cond * std::pow(P, 1.5) * (1 + tol)) << "it " << it;
+    EXPECT_GE(b.diagnostics.sigma_max, e.diagnostics.sigma_max * (1 - 1e-9));
+    EXPECT_LE(b.diagnostics.sigma_min_kept, e.diagnostics.sigma_min_kept * (1 + tol));
+    const double threshold = 1 / std::sqrt(SolverOptions<double>{}.fallback_rcond);  // on cond(B)
+    if (true_cond > threshold * 1.01) EXPECT_TRUE(d.diagnostics.has(warning::kFellBackToSvd)) << "it " << it;
+    if (b.diagnostics.condition_estimate < threshold * (1 - 1e-9))
+      EXPECT_FALSE(d.diagnostics.has(warning::kFellBackToSvd)) << "it " << it;
+  }
+}
+
+TEST(HardCases, NormalEquationsConditionIsABound) {
+  expect_condition_bound<6, 3>();
+  expect_condition_bound<12, 6>();
+}
+
 // Expectation: a failed call (NaN in A or D, A not positive definite) leaves nothing behind: the
 // next call with the earlier, good A and D answers as a fresh solver; and new options apply at
 // once (the kept factorization was the old strategy's).

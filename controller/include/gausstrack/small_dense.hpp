@@ -25,9 +25,10 @@ bool cholesky_in_place(Eigen::Matrix<Scalar, N, N>& m) noexcept {
     Scalar* ck = a + k * N;
     if (ck[k] <= Scalar(0)) return false;
     const Scalar d = std::sqrt(ck[k]);
-    const Scalar inverse = Scalar(1) / d;
     ck[k] = d;
-    for (int i = k + 1; i < N; ++i) ck[i] *= inverse;
+    // Divided, not multiplied by 1 / d: the same roundings as Eigen's LLT at the range's ends
+    // (1 / d can overflow where every quotient is finite).
+    for (int i = k + 1; i < N; ++i) ck[i] /= d;
     for (int j = k + 1; j < N; ++j) {
       Scalar* cj = a + j * N;
       const Scalar ljk = ck[j];
