@@ -87,7 +87,8 @@ struct SolverOptions {
   /// MATLAB `rank` convention.
   Scalar rank_tolerance = Scalar(-1);
   /// The Cholesky path answers only when a lower bound on the reciprocal condition number of
-  /// D A^-1 D^T (at most P^1.5 times below it) is at least this: cond(D A^(-1/2)) up to about 1e3 for double (normal-equations error
+  /// D A^-1 D^T (at most P^1.5 times below it, so the fallback can come from cond(B) about
+  /// 1e3 / P^0.75 on) is at least this: cond(D A^(-1/2)) up to about 1e3 for double (normal-equations error
   /// eps * cond^2 below about 2e-10), about 30 for float.
   Scalar fallback_rcond = std::numeric_limits<Scalar>::digits > 24 ? Scalar(1e-6) : Scalar(1e-3);
   /// lambda of kDampedLeastSquares, in the units of the singular values of D A^(-1/2).
@@ -110,8 +111,9 @@ struct SolverOptions {
 
 /// Diagnostics of one solve. Singular values are those of B = D L^-T, which equal those of
 /// D A^(-1/2): exact for kSvd; for the normal equations bounds from their Cholesky factor
-/// (sigma_max from above, sigma_min_kept from below, so the condition estimate is never low);
-/// for kCompleteOrthogonal estimates from its triangular factor's diagonal.
+/// (sigma_max from above, sigma_min_kept from below, so the condition estimate is never low; with
+/// damping they bound sqrt(sigma^2 + lambda^2) instead); for kCompleteOrthogonal estimates from
+/// its triangular factor's diagonal.
 template <typename Scalar>
 struct SolveDiagnostics {
   Status status = Status::kOk;
@@ -395,7 +397,7 @@ class ConstraintSolver {
   }
 
 
-  // LLT of B B^T + lambda2 I = D A^-1 D^T + lambda2 I. Returns false when it is not usable.
+  // Cholesky of B B^T + lambda2 I = D A^-1 D^T + lambda2 I. Returns false when it is not usable.
   bool factorize_normal_equations(Scalar lambda2, bool require_well_conditioned,
                                   SolveDiagnostics<Scalar>& diag) noexcept {
     if constexpr (P == 1) {

@@ -1,12 +1,12 @@
 // Dense kernels for the solver's compile-time sizes: Cholesky factorization, triangular solves,
 // products and inverse, written as plain loops over column-major storage.
 //
-// Why not Eigen's LLT and triangularView: at the sizes a controller has (2 to about 32) Eigen sends
-// these operations through its blocked, dynamic-size paths (packing, run-time block sizes), whose
-// overhead is most of the cost, and Eigen's LLT::rcond runs an iterative 1-norm estimator (several
-// triangular solves) on every factorization. Each loop here runs down one contiguous column, so
-// the compiler unrolls and vectorizes it for the fixed size; nothing allocates or throws.
-// Only the lower triangle of a factor is read or written.
+// Why not Eigen's LLT and triangularView: at the sizes a controller has (2 to about 32) Eigen runs
+// these operations on run-time-sized blocks (matrix-vector products and triangular solves with
+// dynamic sizes, blocked ones for several right sides), whose overhead is most of the cost, and
+// Eigen's LLT::rcond runs an iterative 1-norm estimator (several triangular solves). Each inner
+// loop here runs down one contiguous column, and the solves' divisions are taken off the dependent
+// chains; nothing allocates or throws. Only the lower triangle of a factor is read.
 #pragma once
 
 #include <Eigen/Core>
@@ -26,8 +26,8 @@ bool cholesky_in_place(Eigen::Matrix<Scalar, N, N>& m) noexcept {
     if (ck[k] <= Scalar(0)) return false;
     const Scalar d = std::sqrt(ck[k]);
     ck[k] = d;
-    // Divided, not multiplied by 1 / d: the same roundings as Eigen's LLT at the range's ends
-    // (1 / d can overflow where every quotient is finite).
+    // Divided by d, as Eigen's LLT does, rather than multiplied by 1 / d (one rounding, not two:
+    // a borderline matrix at the range's ends is then judged as Eigen judges it).
     for (int i = k + 1; i < N; ++i) ck[i] /= d;
     for (int j = k + 1; j < N; ++j) {
       Scalar* cj = a + j * N;
@@ -42,7 +42,7 @@ bool cholesky_in_place(Eigen::Matrix<Scalar, N, N>& m) noexcept {
 template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
 void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l,
                           Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
-  static_assert(!(Options & Eigen::RowMajor) || K == 1, "column-major right sides");
+  static_assert(N == 1 || K == 1 || !(Options & Eigen::RowMajor), "column-major right sides");
   const Scalar* a = l.data();
   Scalar inverse[N];  // independent divisions up front: only multiplications on the dependent path
   for (int k = 0; k < N; ++k) inverse[k] = Scalar(1) / a[k * N + k];
@@ -61,7 +61,7 @@ void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l,
 template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
 void solve_lower_transposed_in_place(const Eigen::Matrix<Scalar, N, N>& l,
                                      Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
-  static_assert(!(Options & Eigen::RowMajor) || K == 1, "column-major right sides");
+  static_assert(N == 1 || K == 1 || !(Options & Eigen::RowMajor), "column-major right sides");
   const Scalar* a = l.data();
   Scalar inverse[N];
   for (int k = 0; k < N; ++k) inverse[k] = Scalar(1) / a[k * N + k];
@@ -81,7 +81,7 @@ void solve_lower_transposed_in_place(const Eigen::Matrix<Scalar, N, N>& l,
 template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
 void multiply_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l,
                              Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
-  static_assert(!(Options & Eigen::RowMajor) || K == 1, "column-major right sides");
+  static_assert(N == 1 || K == 1 || !(Options & Eigen::RowMajor), "column-major right sides");
   const Scalar* a = l.data();
   for (int c = 0; c < K; ++c) {
     Scalar* xc = x.data() + c * N;
@@ -98,7 +98,7 @@ void multiply_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l,
 template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
 void multiply_lower_transposed_in_place(const Eigen::Matrix<Scalar, N, N>& l,
                                         Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
-  static_assert(!(Options & Eigen::RowMajor) || K == 1, "column-major right sides");
+  static_assert(N == 1 || K == 1 || !(Options & Eigen::RowMajor), "column-major right sides");
   const Scalar* a = l.data();
   for (int c = 0; c < K; ++c) {
     Scalar* xc = x.data() + c * N;
