@@ -62,7 +62,7 @@ def main(d):
                 "kept while A and D are unchanged bit for bit, as they are for the Duffing systems); "
                 "`cholesky_refactor` factors on every call, as a configuration-dependent A and D need; "
                 "`cholesky_dense_refactor` also reads a declared-diagonal A as dense (the general case). "
-                "`plain_fixed` is the same mathematics with no checks and no diagnostics.", ""]
+                "`plain_fixed` is the same mathematics on the law's own kernels with no checks and no diagnostics.", ""]
         b = benchmarks(doc)
         models = []
         for name in b:
@@ -147,6 +147,28 @@ def main(d):
 
             out.append(f"| {m} | {ns(terms)} | " + " | ".join(ns(v) for v in solve)
                        + f" | {over(solve[3], solve[0])} | {over(solve[3], solve[1])} |")
+
+        phases = ("mass_cholesky", "constraint_solve", "gram", "gram_cholesky", "gram_inverse")
+        phased = [m for m in models if f"phase/{m}/kkt_lu" in b]
+        if phased:
+            out += ["", "### The general case's solve taken apart", "",
+                    "Each kernel of the refactoring path alone (`phase/*`, the law's own kernels on the benchmark "
+                    "states' terms): Cholesky of A (N^3/3 flops), B^T = L^-1 D^T (N^2 P), the Gram matrix B B^T "
+                    "(N P^2), its Cholesky (P^3/3) and the inverse factor the condition bound needs (P^3/3); `rest` is "
+                    "the general row's solve (row less `model_terms`) less these: the right-hand sides, the "
+                    "products, the checks and the residual. Beside it the KKT baseline's LU alone (`kkt_lu`, "
+                    "2 (N+P)^3/3 flops) and its solve (row less `model_terms`).", "",
+                    "| system | " + " | ".join(phases) + " | rest | general solve | kkt_lu | KKT solve |",
+                    "|---|" + "---|" * (len(phases) + 4)]
+            for m in phased:
+                general = t(f"law/{m}/cholesky_dense_refactor")
+                if math.isnan(general):
+                    general = t(f"law/{m}/cholesky_refactor")
+                terms = t(f"baseline/{m}/model_terms")
+                parts = [t(f"phase/{m}/{p_}") for p_ in phases]
+                rest = general - terms - sum(parts)
+                out.append(f"| {m} | " + " | ".join(ns(v) for v in parts) + f" | {ns(rest)} | {ns(general - terms)} | "
+                           f"{ns(t(f'phase/{m}/kkt_lu'))} | {ns(t(f'baseline/{m}/dynamic_kkt') - terms)} |")
 
         chains = sorted(((int(m.split("_")[1].split("x")[0]), m) for m in models if m.startswith("chain_")))
         if len(chains) >= 3:

@@ -7,9 +7,11 @@
 //                  .pseudoInverse(), Q' = A^(1/2) (D A^(-1/2))^+ (g - D a);
 //   dynamic_kkt    the KKT system [A D^T; D 0] [q''; -lambda] = [Q - f; g] solved by a
 //                  dynamic-size LU, Q' = A q'' + f - Q;
-//   plain_fixed    the default path's mathematics at fixed size with no checks and no
-//                  diagnostics: LLT of A, B^T = L^-1 D^T, LLT of B B^T, both parts of eq. (32)
-//                  and q''; the floor the default's diagnostics are measured against;
+//   plain_fixed    the general case's mathematics on the law's own kernels (small_dense.hpp)
+//                  with no checks and no diagnostics: Cholesky of A, B^T = L^-1 D^T, Cholesky
+//                  of B B^T applied by two triangular solves, both parts of eq. (32) and q''; the
+//                  floor the checks and diagnostics are measured against (law/<m>/
+//                  cholesky_dense_refactor, or cholesky_refactor for a dense model);
 //   model_terms    the model's terms A, f, Q, D, g alone (one evaluate_model, as every row
 //                  above and the law do): the part of each row that is not the solve;
 //   closed_form    (Duffing only) the hand-derived force Q' = (r, -r) / (1/m1 + 1/m2),
@@ -32,10 +34,13 @@
 #include <chrono>
 #include <random>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "allocation_counter.hpp"
 #include "gausstrack/nodes/latency_recorder.hpp"
 #include "gausstrack/reference/literal_formulas.hpp"
+#include "gausstrack/small_dense.hpp"
 #include "gausstrack/tracking_controller.hpp"
 
 namespace gausstrack::bench {
@@ -181,19 +186,28 @@ void bench_plain_fixed(benchmark::State& state) {
   measure(state, [&](std::size_t k) {
     TermsOf<M> t;
     evaluate_model(model, s.q[k], s.qd[k], s.t[k], t);
-    const Eigen::LLT<Eigen::Matrix<double, N, N>> mass(t.mass_matrix);
-    const Eigen::Matrix<double, N, 1> a = mass.solve(t.applied_force - t.nonlinear_force);
+    // The law's kernels (small_dense) with none of its checks: no finiteness tests, no condition
+    // bound (so no L_G^-1: the Gram matrix is applied by two triangular solves), no residual.
+    Eigen::Matrix<double, N, N> l = t.mass_matrix;
+    small_dense::cholesky_in_place(l);
+    Eigen::Matrix<double, N, 1> a = t.applied_force - t.nonlinear_force;
+    small_dense::solve_lower_in_place(l, a);
+    small_dense::solve_lower_transposed_in_place(l, a);
     Eigen::Matrix<double, N, P> bt = t.constraint_matrix.transpose();
-    mass.matrixL().solveInPlace(bt);
-    const Eigen::LLT<Eigen::Matrix<double, P, P>> gram(bt.transpose() * bt);
+    small_dense::solve_lower_in_place(l, bt);  // B^T = L^-1 D^T
+    Eigen::Matrix<double, P, P> gram;
+    gram.noalias() = bt.transpose().lazyProduct(bt);
+    small_dense::cholesky_in_place(gram);
     Eigen::Matrix<double, P, 2> w;
-    w.col(0) = -(t.constraint_matrix * a);
+    w.col(0).noalias() = -(t.constraint_matrix.lazyProduct(a));
     w.col(1) = t.constraint_rhs;
-    gram.solveInPlace(w);
-    Eigen::Matrix<double, N, 2> y = bt * w;
+    small_dense::solve_lower_in_place(gram, w);
+    small_dense::solve_lower_transposed_in_place(gram, w);
+    Eigen::Matrix<double, N, 2> y;
+    y.noalias() = bt.lazyProduct(w);
     Eigen::Matrix<double, N, 1> dq = y.col(0) + y.col(1);
-    y = mass.matrixL() * y;  // the two parts of eq. (32)
-    mass.matrixU().solveInPlace(dq);
+    small_dense::multiply_lower_in_place(l, y);  // the two parts of eq. (32)
+    small_dense::solve_lower_transposed_in_place(l, dq);
     const Eigen::Matrix<double, N, 1> qdd = a + dq;
     benchmark::DoNotOptimize(y.data());
     benchmark::DoNotOptimize(qdd.data());
@@ -210,6 +224,94 @@ void bench_model_terms(benchmark::State& state) {
     benchmark::DoNotOptimize(t.constraint_rhs.data());
     benchmark::ClobberMemory();
   });
+}
+
+/// The general case's solve taken apart (where its time goes): each kernel of the law's
+/// refactoring path alone, on the terms of the benchmark states, beside the KKT baseline's LU
+/// alone (its matrix assembled outside the timed call). `phase` selects the kernel.
+enum class Phase { kMassCholesky, kConstraintSolve, kGram, kGramCholesky, kGramInverse, kKktLu };
+
+template <typename M>
+void bench_phase(benchmark::State& state, Phase phase) {
+  constexpr int N = M::kDof, P = M::kConstraints;
+  struct Inputs {
+    Eigen::Matrix<double, N, N> a, l;                // A and its factor
+    Eigen::Matrix<double, N, P> dt, bt;              // D^T and B^T = L^-1 D^T
+    Eigen::Matrix<double, P, P> gram, gram_l;        // B B^T and its factor
+    Eigen::MatrixXd kkt;                             // [A D^T; D 0]
+  };
+  static const std::vector<Inputs> inputs = [] {
+    const States<M> s;
+    const M model{};
+    std::vector<Inputs> v(States<M>::kCount);
+    for (std::size_t k = 0; k < v.size(); ++k) {
+      const BaselineTerms<M> m(model, s, k);
+      Inputs& in = v[k];
+      in.a = m.A;
+      in.l = m.A;
+      small_dense::cholesky_in_place(in.l);
+      in.dt = m.D.transpose();
+      in.bt = in.dt;
+      small_dense::solve_lower_in_place(in.l, in.bt);
+      in.gram.noalias() = in.bt.transpose().lazyProduct(in.bt);
+      in.gram_l = in.gram;
+      small_dense::cholesky_in_place(in.gram_l);
+      in.kkt = Eigen::MatrixXd::Zero(N + P, N + P);
+      in.kkt.topLeftCorner(N, N) = m.A;
+      in.kkt.topRightCorner(N, P) = m.D.transpose();
+      in.kkt.bottomLeftCorner(P, N) = m.D;
+    }
+    return v;
+  }();
+  Eigen::Matrix<double, N, N> l;
+  Eigen::Matrix<double, N, P> bt;
+  Eigen::Matrix<double, P, P> g, g_inv;
+  measure(state, [&](std::size_t k) {
+    const Inputs& in = inputs[k];
+    switch (phase) {
+      case Phase::kMassCholesky:
+        l = in.a;
+        benchmark::DoNotOptimize(small_dense::cholesky_in_place(l));
+        benchmark::DoNotOptimize(l.data());
+        break;
+      case Phase::kConstraintSolve:
+        bt = in.dt;
+        small_dense::solve_lower_in_place(in.l, bt);
+        benchmark::DoNotOptimize(bt.data());
+        break;
+      case Phase::kGram:
+        g.noalias() = in.bt.transpose().lazyProduct(in.bt);
+        benchmark::DoNotOptimize(g.data());
+        break;
+      case Phase::kGramCholesky:
+        g = in.gram;
+        benchmark::DoNotOptimize(small_dense::cholesky_in_place(g));
+        benchmark::DoNotOptimize(g.data());
+        break;
+      case Phase::kGramInverse:
+        benchmark::DoNotOptimize(small_dense::invert_lower(in.gram_l, g_inv));
+        benchmark::DoNotOptimize(g_inv.data());
+        break;
+      case Phase::kKktLu: {
+        const Eigen::PartialPivLU<Eigen::MatrixXd> lu(in.kkt);
+        benchmark::DoNotOptimize(lu.matrixLU().data());
+        break;
+      }
+    }
+  });
+}
+
+/// Registers the phases of the general case's solve for model M, e.g. "phase/chain_16x8/gram".
+template <typename M>
+void register_solve_phases(const std::string& name) {
+  const std::string size = name + "_" + std::to_string(M::kDof) + "x" + std::to_string(M::kConstraints);
+  const std::pair<Phase, const char*> phases[] = {
+      {Phase::kMassCholesky, "mass_cholesky"}, {Phase::kConstraintSolve, "constraint_solve"},
+      {Phase::kGram, "gram"},                  {Phase::kGramCholesky, "gram_cholesky"},
+      {Phase::kGramInverse, "gram_inverse"},   {Phase::kKktLu, "kkt_lu"}};
+  for (const auto& [phase, label] : phases)
+    benchmark::RegisterBenchmark(("phase/" + size + "/" + label).c_str(),
+                                 [phase = phase](benchmark::State& st) { bench_phase<M>(st, phase); });
 }
 
 inline void bench_timer_overhead(benchmark::State& state) {

@@ -7,8 +7,11 @@ namespace {
 
 const bool registered = [] {
   register_model<systems::DuffingChain<8, 4, double>>("chain");
+  register_solve_phases<systems::DuffingChain<8, 4, double>>("chain");
   register_model<systems::DuffingChain<16, 8, double>>("chain");
+  register_solve_phases<systems::DuffingChain<16, 8, double>>("chain");
   register_model<systems::DuffingChain<32, 16, double>>("chain");
+  register_solve_phases<systems::DuffingChain<32, 16, double>>("chain");
   return true;
 }();
 

@@ -7,7 +7,9 @@ namespace {
 
 const bool registered = [] {
   register_model<systems::DuffingChain<2, 1, double>>("chain");
+  register_solve_phases<systems::DuffingChain<2, 1, double>>("chain");
   register_model<systems::DuffingChain<4, 2, double>>("chain");
+  register_solve_phases<systems::DuffingChain<4, 2, double>>("chain");
   return true;
 }();
 

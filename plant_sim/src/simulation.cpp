@@ -75,8 +75,9 @@ class Plant {
   int dof() const { return n_; }
 
   // Generalized impressed force Q(q, q', t) from the force effects listed, and nothing else.
-  V applied_force(const V& q, const V& qd, double t, RunSummary& stats) const {
-    V Q = V::Zero(n_);
+  // Every output here is written into a vector the caller keeps (no allocation per evaluation).
+  void applied_force(const V& q, const V& qd, double t, RunSummary& stats, V& Q) const {
+    Q.setZero(n_);
     for (const EffectSpec& e : forces_) {
       ++stats.effect_evaluations[static_cast<std::size_t>(e.kind)];
       const double xb = e.b == kGround ? 0.0 : q(e.b), vb = e.b == kGround ? 0.0 : qd(e.b);
@@ -93,13 +94,12 @@ class Plant {
       Q(e.a) += force_on_a;
       if (e.b != kGround) Q(e.b) -= force_on_a;
     }
-    return Q;
   }
 
-  V saturate(const V& u, RunSummary& stats) const {
-    if (!saturation_) return u;
+  void saturate(V& u, RunSummary& stats) const {
+    if (!saturation_) return;
     ++stats.effect_evaluations[static_cast<std::size_t>(EffectKind::kActuatorSaturation)];
-    return u.cwiseMax(-saturation_->value).cwiseMin(saturation_->value);
+    u = u.cwiseMax(-saturation_->value).cwiseMin(saturation_->value);
   }
 
   // The state the controller measures: exact, or with the listed sensor noise.
@@ -136,23 +136,30 @@ class Plant {
   }
 
   // Eq. (31) by Lagrange multipliers: [A D^T; D 0] (q'', -lambda) = (Q + u - f, g).
-  V acceleration(const V& q, const V& qd, double t, const V& u, RunSummary& stats) {
-    V rhs = applied_force(q, qd, t, stats) + u;
+  void acceleration(const V& q, const V& qd, double t, const V& u, RunSummary& stats, V& qdd) {
+    V& rhs = force_;
+    applied_force(q, qd, t, stats, rhs);
+    rhs += u;
     if (model_) {
       model_->evaluate(q, qd, t, A_, f_, Q_);
       rhs += Q_ - f_;
     }
     const int p = static_cast<int>(constraints_.size());
     if (p == 0) {
-      if (!model_) return rhs.cwiseQuotient(mass_);
+      if (!model_) {
+        qdd = rhs.cwiseQuotient(mass_);
+        return;
+      }
       llt_.compute(A_);
-      if (llt_.info() != Eigen::Success) return V::Constant(n_, std::numeric_limits<double>::quiet_NaN());
-      return llt_.solve(rhs);
+      if (llt_.info() != Eigen::Success) qdd.setConstant(n_, std::numeric_limits<double>::quiet_NaN());
+      else qdd = llt_.solve(rhs);
+      return;
     }
     kkt_.setZero(n_ + p, n_ + p);
     if (model_) kkt_.topLeftCorner(n_, n_) = A_;
     else kkt_.topLeftCorner(n_, n_).diagonal() = mass_;
-    V b(n_ + p);
+    V& b = kkt_rhs_;
+    b.resize(n_ + p);
     b.head(n_) = rhs;
     for (int k = 0; k < p; ++k) {
       double g = 0;
@@ -164,7 +171,8 @@ class Plant {
     // Rank-revealing, so that a configuration where the rows lose rank still gives the
     // least-squares multipliers rather than a division by zero.
     kkt_solver_.compute(kkt_);
-    return kkt_solver_.solve(b).head(n_);
+    kkt_solution_ = kkt_solver_.solve(b);
+    qdd = kkt_solution_.head(n_);
   }
 
   bool has_constraints() const { return !constraints_.empty(); }
@@ -248,6 +256,7 @@ class Plant {
   M kkt_;
   Eigen::RowVectorXd row_;
   Eigen::CompleteOrthogonalDecomposition<M> kkt_solver_;
+  V force_, kkt_rhs_, kkt_solution_;  // acceleration()'s work vectors, sized on first use
 };
 
 // The scene's tracking controller (none without a tracking section), or, when the forces come
@@ -266,13 +275,16 @@ struct Control {
     else law = model.control_law(s.tracking);
   }
 
-  V force(const V& q, const V& qd, double t, RunSummary& stats) {
-    V u = V::Zero(q.size());
+  // u = the law's force at (q, q', t); zero without a law or on failure.
+  void force(const V& q, const V& qd, double t, RunSummary& stats, V& u) {
+    u.setZero(q.size());
     if (law) {
       ++stats.control_evaluations;
-      if (failed(law->compute(q.data(), qd.data(), t, u.data()))) ++stats.control_failures;
+      if (failed(law->compute(q.data(), qd.data(), t, u.data()))) {
+        ++stats.control_failures;
+        u.setZero();
+      }
     }
-    return u;  // zero on failure
   }
 
   double tracking_error(const V& q, const V& qd, double t) const {
@@ -306,11 +318,20 @@ RunResult run(const Scene& s, const RunOptions& options) {
 
   const bool sampled = s.control_mode == ControlMode::kSampled;
   V held = V::Zero(N);  // the control force held over the current control period
+  // The right-hand side writes into vectors sized once here: no allocation per evaluation.
+  V rhs_q(N), rhs_qd(N), rhs_u(N), rhs_qdd(N);
   auto rhs = [&](const State& x, State& dxdt, double t) {
     ++stats.rhs_evaluations;
-    const V q = x.head(N), qd = x.tail(N);
-    const V u = sampled ? held : plant.saturate(control.force(q, qd, t, stats), stats);
-    dxdt << qd, plant.acceleration(q, qd, t, u, stats);
+    rhs_q = x.head(N);
+    rhs_qd = x.tail(N);
+    if (!sampled) {
+      control.force(rhs_q, rhs_qd, t, stats, rhs_u);
+      plant.saturate(rhs_u, stats);
+    }
+    plant.acceleration(rhs_q, rhs_qd, t, sampled ? held : rhs_u, stats, rhs_qdd);
+    dxdt.resize(2 * N);
+    dxdt.head(N) = rhs_qd;
+    dxdt.tail(N) = rhs_qdd;
   };
 
   State x(2 * N);
@@ -328,7 +349,8 @@ RunResult run(const Scene& s, const RunOptions& options) {
     V u = held;
     if (!sampled) {
       RunSummary scratch;  // recording must not count as simulation work
-      u = plant.saturate(control.force(q, qd, t, scratch), scratch);
+      control.force(q, qd, t, scratch, u);
+      plant.saturate(u, scratch);
     }
     smp.q.assign(q.data(), q.data() + N);
     smp.qd.assign(qd.data(), qd.data() + N);
@@ -471,10 +493,11 @@ RunResult run(const Scene& s, const RunOptions& options) {
           stats.stopped_early = true;
           break;
         }
-        held = plant.saturate(u, stats);
+        held = u;
       } else {
-        held = plant.saturate(control.force(q, qd, t0, stats), stats);
+        control.force(q, qd, t0, stats, held);
       }
+      plant.saturate(held, stats);
     }
     if (next_sample == 0) {
       record(x, 0.0);
@@ -582,8 +605,9 @@ std::vector<double> evaluate(const Scene& s, const std::vector<double>& q, const
     throw SceneError(s.engine.where + ": this plant's physics are the '" + s.engine.name + "' engine's, not plant_sim's");
   Plant plant(s, RunOptions{});
   RunSummary stats;
-  const V r = u ? plant.acceleration(to_vector(q, s), to_vector(qd, s), t, to_vector(*u, s), stats)
-                : plant.applied_force(to_vector(q, s), to_vector(qd, s), t, stats);
+  V r;
+  if (u) plant.acceleration(to_vector(q, s), to_vector(qd, s), t, to_vector(*u, s), stats, r);
+  else plant.applied_force(to_vector(q, s), to_vector(qd, s), t, stats, r);
   return {r.data(), r.data() + r.size()};
 }
 
