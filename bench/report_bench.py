@@ -153,11 +153,15 @@ def main(d):
         if phased:
             out += ["", "### The general case's solve taken apart", "",
                     "Each kernel of the refactoring path alone (`phase/*`, the law's own kernels on the benchmark "
-                    "states' terms): Cholesky of A (N^3/3 flops), B^T = L^-1 D^T (N^2 P), the Gram matrix B B^T "
-                    "(N P^2), its Cholesky (P^3/3) and the inverse factor the condition bound needs (P^3/3); `rest` is "
-                    "the general row's solve (row less `model_terms`) less these: the right-hand sides, the "
-                    "products, the checks and the residual. Beside it the KKT baseline's LU alone (`kkt_lu`, "
-                    "2 (N+P)^3/3 flops) and its solve (row less `model_terms`).", "",
+                    "states' terms, each input copied in first): Cholesky of A (N^3/3 flops), B^T = L^-1 D^T "
+                    "(N^2 P), the Gram matrix B B^T (2 N P^2, the full product), its Cholesky (P^3/3) and the "
+                    "inverse factor the condition bound needs (P^3/3); with P = 1 the law takes a scalar path "
+                    "instead of the last two (shown as -). `rest` is the general row's solve (row less "
+                    "`model_terms`) less the kernels it runs: the right-hand sides and their triangular solves, the "
+                    "products, the checks and the residual. Beside it the KKT baseline's LU alone as a user writes "
+                    "it (`kkt_lu`: a `PartialPivLU<MatrixXd>` constructed on the assembled matrix, so its 3 "
+                    "allocations, the matrix's copy and Eigen's norm pass included; 2 (N+P)^3/3 flops) and the KKT "
+                    "row's solve (row less `model_terms`).", "",
                     "| system | " + " | ".join(phases) + " | rest | general solve | kkt_lu | KKT solve |",
                     "|---|" + "---|" * (len(phases) + 4)]
             for m in phased:
@@ -165,9 +169,12 @@ def main(d):
                 if math.isnan(general):
                     general = t(f"law/{m}/cholesky_refactor")
                 terms = t(f"baseline/{m}/model_terms")
-                parts = [t(f"phase/{m}/{p_}") for p_ in phases]
-                rest = general - terms - sum(parts)
-                out.append(f"| {m} | " + " | ".join(ns(v) for v in parts) + f" | {ns(rest)} | {ns(general - terms)} | "
+                scalar = m.endswith("x1")  # P = 1: no Gram Cholesky nor inverse factor in the law
+                parts = [math.nan if scalar and p_ in ("gram_cholesky", "gram_inverse") else t(f"phase/{m}/{p_}")
+                         for p_ in phases]
+                rest = general - terms - sum(v for v in parts if not math.isnan(v))
+                out.append(f"| {m} | " + " | ".join("-" if math.isnan(v) else ns(v) for v in parts)
+                           + f" | {ns(rest)} | {ns(general - terms)} | "
                            f"{ns(t(f'phase/{m}/kkt_lu'))} | {ns(t(f'baseline/{m}/dynamic_kkt') - terms)} |")
 
         chains = sorted(((int(m.split("_")[1].split("x")[0]), m) for m in models if m.startswith("chain_")))

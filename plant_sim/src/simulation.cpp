@@ -75,7 +75,8 @@ class Plant {
   int dof() const { return n_; }
 
   // Generalized impressed force Q(q, q', t) from the force effects listed, and nothing else.
-  // Every output here is written into a vector the caller keeps (no allocation per evaluation).
+  // Every output here is written into a vector the caller keeps: no allocation per evaluation,
+  // except in a constrained plant's KKT solve (Eigen's CompleteOrthogonalDecomposition::solve).
   void applied_force(const V& q, const V& qd, double t, RunSummary& stats, V& Q) const {
     Q.setZero(n_);
     for (const EffectSpec& e : forces_) {
@@ -318,7 +319,9 @@ RunResult run(const Scene& s, const RunOptions& options) {
 
   const bool sampled = s.control_mode == ControlMode::kSampled;
   V held = V::Zero(N);  // the control force held over the current control period
-  // The right-hand side writes into vectors sized once here: no allocation per evaluation.
+  // The right-hand side writes into vectors sized once here: no allocation per evaluation but a
+  // constrained plant's KKT solve. (A sampled run still allocates its measured state and force
+  // once per control period, below.)
   V rhs_q(N), rhs_qd(N), rhs_u(N), rhs_qdd(N);
   auto rhs = [&](const State& x, State& dxdt, double t) {
     ++stats.rhs_evaluations;

@@ -5,6 +5,7 @@
 // rank-revealing CompleteOrthogonalDecomposition, whose solve allocates: not covered here.)
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
 
@@ -37,7 +38,17 @@ Counted run(const std::string& scene, const std::string& duration, std::vector<s
   return c;
 }
 
+// False where the counter cannot see Eigen's allocations (sanitizer builds do not replace malloc).
+bool counter_sees_eigen() {
+  return support::allocations_during([] {
+           const Eigen::VectorXd v = Eigen::VectorXd::Constant(64, 1.0);
+           volatile double sum = v.sum();
+           (void)sum;
+         }) >= 1;
+}
+
 void expect_no_allocation_per_step(const std::string& scene, std::vector<std::string> more = {}) {
+  if (!counter_sees_eigen()) GTEST_SKIP() << "this build's allocation counter does not see malloc";
   const Counted shorter = run(scene, "0.25", more), longer = run(scene, "0.5", more);
   ASSERT_EQ(longer.rhs, 2 * shorter.rhs) << scene;  // the steps did double
   EXPECT_EQ(longer.allocations, shorter.allocations)
