@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "fuzz_input.hpp"
-#include "gausstrack/plant_sim/builtin_models.hpp"
+#include "gausstrack/tracking/builtin_models.hpp"
 #include "gausstrack/plant_sim/models.hpp"
 #include "gausstrack/plant_sim/scene.hpp"
 #include "gausstrack/plant_sim/simulation.hpp"

@@ -29,7 +29,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include <Eigen/Dense>
+#include <Eigen/Core>
 #include <algorithm>
 #include <chrono>
 #include <random>
@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "allocation_counter.hpp"
+#include "dynamic_baselines.hpp"
 #include "gausstrack/nodes/latency_recorder.hpp"
 #include "gausstrack/reference/literal_formulas.hpp"
 #include "gausstrack/small_dense.hpp"
@@ -144,15 +145,7 @@ void bench_dynamic_user(benchmark::State& state) {
   const M model{};
   measure(state, [&](std::size_t k) {
     const BaselineTerms<M> m(model, s, k);
-    const Eigen::MatrixXd A = m.A, D = m.D;
-    const Eigen::VectorXd f = m.f, Q = m.Q, g = m.g;
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(A);
-    const Eigen::MatrixXd a_half = eig.operatorSqrt();
-    const Eigen::MatrixXd a_minus_half = eig.operatorInverseSqrt();
-    const Eigen::VectorXd a = A.ldlt().solve(Q - f);
-    const Eigen::MatrixXd B = D * a_minus_half;
-    const Eigen::MatrixXd B_plus = B.completeOrthogonalDecomposition().pseudoInverse();
-    const Eigen::VectorXd force = a_half * (B_plus * (g - D * a));
+    const Eigen::VectorXd force = dynamic_user_force(m.A, m.f, m.Q, m.D, m.g);
     benchmark::DoNotOptimize(force.data());
   });
 }
@@ -161,19 +154,9 @@ template <typename M>
 void bench_dynamic_kkt(benchmark::State& state) {
   static const States<M> s;
   const M model{};
-  constexpr int N = M::kDof, P = M::kConstraints;
   measure(state, [&](std::size_t k) {
     const BaselineTerms<M> m(model, s, k);
-    const Eigen::MatrixXd A = m.A, D = m.D;
-    const Eigen::VectorXd impressed = m.Q - m.f;
-    Eigen::MatrixXd K = Eigen::MatrixXd::Zero(N + P, N + P);
-    K.topLeftCorner(N, N) = A;
-    K.topRightCorner(N, P) = D.transpose();
-    K.bottomLeftCorner(P, N) = D;
-    Eigen::VectorXd rhs(N + P);
-    rhs << impressed, m.g;
-    const Eigen::VectorXd x = K.partialPivLu().solve(rhs);
-    const Eigen::VectorXd force = A * x.head(N) - impressed;
+    const Eigen::VectorXd force = dynamic_kkt_force(m.A, m.f, m.Q, m.D, m.g);
     benchmark::DoNotOptimize(force.data());
   });
 }
@@ -292,11 +275,9 @@ void bench_phase(benchmark::State& state, Phase phase) {
         benchmark::DoNotOptimize(small_dense::invert_lower(in.gram_l, g_inv));
         benchmark::DoNotOptimize(g_inv.data());
         break;
-      case Phase::kKktLu: {
-        const Eigen::PartialPivLU<Eigen::MatrixXd> lu(in.kkt);
-        benchmark::DoNotOptimize(lu.matrixLU().data());
+      case Phase::kKktLu:
+        benchmark::DoNotOptimize(kkt_lu(in.kkt));
         break;
-      }
     }
   });
 }

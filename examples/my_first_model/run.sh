@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
-# Runs the example offline, then as two LCM processes in lock-step, and checks that both track.
+# Checks the model, runs the example offline, then as two LCM processes in lock-step, and checks
+# that both track.
 # usage: run.sh BUILD_DIR OUT_DIR
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 build=$1 out=$2
 scene="$here/tethered_puck.yaml"
 mkdir -p "$out/offline" "$out/lcm"
+"$build/my_model_check"
 "$build/my_model_sim" "$scene" "$out/offline"
 url="udpm://239.255.76.67:7667?ttl=0"
 sets=(--set control.mode=sampled --set control.rate=500)

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <string>
 
-#include "gausstrack/plant_sim/builtin_models.hpp"
+#include "gausstrack/tracking/builtin_models.hpp"
 #include "gausstrack/plant_sim/models.hpp"
 #include "gausstrack/plant_sim/simulation.hpp"
 

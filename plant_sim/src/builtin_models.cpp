@@ -1,5 +1,3 @@
-#include "gausstrack/plant_sim/builtin_models.hpp"
-
 #include <array>
 #include <string>
 
@@ -11,8 +9,9 @@ namespace {
 const std::vector<ModelFactory>& builtin_factories() {
   static const std::vector<ModelFactory> factories = [] {
     std::vector<ModelFactory> all;
-    for (const char* name : kBuiltinModels)
-      visit_builtin_model(name, [&]<typename M>(std::type_identity<M>) { all.push_back(model_factory<M>(name)); });
+    for (const char* name : tracking::kBuiltinModels)
+      tracking::visit_builtin_model(name,
+                                    [&]<typename M>(std::type_identity<M>) { all.push_back(model_factory<M>(name)); });
     return all;
   }();
   return factories;
@@ -24,12 +23,6 @@ const ModelFactory* find_builtin_model(const std::string& name) {
   for (const ModelFactory& f : builtin_factories())
     if (f.name == name) return &f;
   return nullptr;
-}
-
-std::string builtin_model_names() {
-  std::string names;
-  for (const char* name : kBuiltinModels) names += (names.empty() ? "" : ", ") + std::string(name);
-  return names;
 }
 
 }  // namespace gausstrack::plant_sim

@@ -4,6 +4,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "gausstrack/tracking/yaml_reader.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -31,194 +33,10 @@ const char* to_string(EffectKind kind) noexcept {
 
 namespace {
 
-// Walks a YAML mapping with its dotted path, so that every error names file, line and key.
-class Reader {
- public:
-  Reader(YAML::Node node, std::string path, std::shared_ptr<const std::string> file,
-         std::shared_ptr<const std::set<std::string>> overridden)
-      : node_(std::move(node)), path_(std::move(path)), file_(std::move(file)),
-        overridden_(std::move(overridden)) {}
-
-  [[noreturn]] void fail(const std::string& message) const { fail_at(node_, path_, message); }
-
-  [[noreturn]] void fail_at(const YAML::Node& where, const std::string& path,
-                            const std::string& message) const {
-    std::ostringstream out;
-    out << *file_;
-    if (overridden_->count(path)) {
-      out << ": --set " << path;
-    } else {
-      out << ":" << (where.Mark().line + 1);
-      if (!path.empty()) out << ": " << path;
-    }
-    out << ": " << message;
-    throw SceneError(out.str());
-  }
-
-  /// "file:line: key" of this node, as error messages start.
-  std::string where() const {
-    std::ostringstream out;
-    out << *file_;
-    if (overridden_->count(path_)) out << ": --set " << path_;
-    else out << ":" << (node_.Mark().line + 1) << ": " << path_;
-    return out.str();
-  }
-
-  const std::string& file() const { return *file_; }
-  /// True when `key` of this node was given by an override (--set) rather than by the file.
-  bool overridden(const char* key) const { return overridden_->count(key_path(key)) > 0; }
-
-  std::string key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
-
-  /// The text of a mapping key of this node; a key that is a list or a mapping is an error.
-  std::string key(const YAML::Node& k) const {
-    if (!k.IsScalar()) fail_at(k, path_, "a key must be a plain name, not a list or a mapping");
-    return k.Scalar();
-  }
-
-  void require_map() const {
-    if (!node_.IsMap()) fail("must be a mapping of keys to values");
-  }
-
-  // Unknown keys are errors: a misspelt key must not be silently ignored.
-  void allow_only(std::initializer_list<const char*> keys) const {
-    require_map();
-    for (const auto& kv : node_) {
-      const std::string k = key(kv.first);
-      if (std::none_of(keys.begin(), keys.end(), [&](const char* a) { return k == a; })) {
-        std::string allowed;
-        for (const char* a : keys) allowed += std::string(allowed.empty() ? "" : ", ") + a;
-        fail_at(kv.first, key_path(k), "unknown key (allowed here: " + allowed + ")");
-      }
-    }
-  }
-
-  bool has(const char* key) const { return node_.IsMap() && node_[key].IsDefined() && !node_[key].IsNull(); }
-
-  Reader child(const char* key) const {
-    if (!has(key)) fail("missing required key '" + std::string(key) + "'");
-    return Reader(node_[key], key_path(key), file_, overridden_);
-  }
-
-  double number(const char* key) const {
-    const Reader c = child(key);
-    return c.as_number();
-  }
-  double number(const char* key, double fallback) const { return has(key) ? number(key) : fallback; }
-
-  double positive(const char* key) const {
-    const double v = number(key);
-    if (!(v > 0)) child(key).fail("must be > 0 (got " + format(v) + ")");
-    return v;
-  }
-  double positive(const char* key, double fallback) const { return has(key) ? positive(key) : fallback; }
-  double non_negative(const char* key, double fallback) const {
-    if (!has(key)) return fallback;
-    const double v = number(key);
-    if (!(v >= 0)) child(key).fail("must be >= 0 (got " + format(v) + ")");
-    return v;
-  }
-
-  std::string text(const char* key) const {
-    const Reader c = child(key);
-    if (!c.node_.IsScalar()) c.fail("must be a string");
-    return c.node_.Scalar();
-  }
-  std::string text(const char* key, const std::string& fallback) const { return has(key) ? text(key) : fallback; }
-
-  double as_number() const {
-    if (!node_.IsScalar()) fail("must be a number");
-    double v = 0;
-    if (!YAML::convert<double>::decode(node_, v) || !std::isfinite(v))
-      fail("must be a finite number (got '" + node_.Scalar() + "')");
-    return v;
-  }
-
-  std::vector<Reader> items(const char* key) const {
-    const Reader c = child(key);
-    if (!c.node_.IsSequence()) c.fail("must be a list");
-    std::vector<Reader> out;
-    for (std::size_t i = 0; i < c.node_.size(); ++i)
-      out.emplace_back(c.node_[i], c.path_ + "[" + std::to_string(i) + "]", file_, overridden_);
-    return out;
-  }
-
-  const YAML::Node& node() const { return node_; }
-  const std::string& path() const { return path_; }
-
-  static std::string format(double v) {
-    std::ostringstream o;
-    o << v;
-    return o.str();
-  }
-
- private:
-  YAML::Node node_;
-  std::string path_;
-  std::shared_ptr<const std::string> file_;
-  std::shared_ptr<const std::set<std::string>> overridden_;
-};
-
-// "a.b.2.c=value": replaces (or adds) the value at that dotted path, parsed as YAML.
-void apply_override(YAML::Node root, const std::string& assignment, const std::string& file,
-                    std::set<std::string>& overridden) {
-  const auto eq = assignment.find('=');
-  if (eq == std::string::npos || eq == 0)
-    throw SceneError(file + ": --set " + assignment + ": expected key=value");
-  const std::string path = assignment.substr(0, eq);
-  YAML::Node value;
-  try {
-    value = YAML::Load(assignment.substr(eq + 1));
-  } catch (const YAML::Exception& e) {
-    throw SceneError(file + ": --set " + path + ": value is not valid YAML: " + e.msg);
-  }
-  std::vector<std::string> keys;
-  std::stringstream ss(path);
-  for (std::string k; std::getline(ss, k, '.');) keys.push_back(k);
-  YAML::Node cur = root;
-  std::string shown;
-  for (std::size_t i = 0; i < keys.size(); ++i) {
-    const std::string& k = keys[i];
-    const bool last = i + 1 == keys.size();
-    if (cur.IsSequence()) {
-      std::size_t idx = 0;
-      try {
-        idx = std::stoul(k);
-      } catch (...) {
-        throw SceneError(file + ": --set " + path + ": '" + k + "' must index a list");
-      }
-      // An index one past the end appends (e.g. adds an effect to the list).
-      if (idx > cur.size() || (idx == cur.size() && !last))
-        throw SceneError(file + ": --set " + path + ": index " + k + " out of range");
-      if (last && idx == cur.size()) {
-        cur.push_back(value);
-      } else if (last) {
-        cur[idx] = value;
-      } else {
-        YAML::Node next = cur[idx];
-        cur.reset(next);
-      }
-      shown += (shown.empty() ? "" : ".") + k;
-      continue;
-    }
-    if (!cur.IsMap() && cur.IsDefined() && !cur.IsNull())
-      throw SceneError(file + ": --set " + path + ": '" + shown + "' is not a mapping");
-    if (last) {
-      cur[k] = value;
-    } else {
-      YAML::Node next = cur[k];
-      cur.reset(next);
-    }
-    shown += (shown.empty() ? "" : ".") + k;
-  }
-  // Record the path as the readers spell it (list indices in brackets).
-  std::string spelled;
-  for (const std::string& k : keys) {
-    const bool index = !k.empty() && std::all_of(k.begin(), k.end(), ::isdigit);
-    spelled += index ? "[" + k + "]" : (spelled.empty() ? "" : ".") + k;
-  }
-  overridden.insert(spelled);
-}
+using tracking::check_parameter_names;
+using tracking::read_parameters;
+using tracking::read_tracking;
+using tracking::Reader;
 
 int coordinate_index(const Reader& r, const std::vector<std::string>& names, bool allow_ground) {
   if (!r.node().IsScalar()) r.fail("must name a coordinate");
@@ -302,64 +120,6 @@ ConstraintSpec read_constraint(const Reader& r, const std::vector<std::string>& 
   return c;
 }
 
-std::vector<ModelParameter> read_parameters(const Reader& r) {
-  r.require_map();
-  std::vector<ModelParameter> out;
-  for (const auto& kv : r.node()) {
-    const std::string k = r.key(kv.first);
-    const Reader v = r.child(k.c_str());
-    out.push_back({k, v.as_number(), v.where()});
-  }
-  return out;
-}
-
-// Parameter names of a compiled-in model are checked with the scene (file, line, key).
-void check_parameter_names(const Reader& parent, const char* key, const ModelFactory& f) {
-  if (!parent.has(key)) return;
-  const Reader r = parent.child(key);
-  r.require_map();
-  for (const auto& kv : r.node()) {
-    const std::string k = r.key(kv.first);
-    if (std::find(f.parameter_names.begin(), f.parameter_names.end(), k) == f.parameter_names.end()) {
-      std::string known;
-      for (const auto& p : f.parameter_names) known += (known.empty() ? "" : ", ") + p;
-      r.fail_at(kv.first, r.key_path(k), "model '" + f.name + "' has no parameter '" + k + "' (known: " + known + ")");
-    }
-  }
-}
-
-TrackingSpec read_tracking(const Reader& t) {
-  t.allow_only({"model", "parameters", "trajectory", "stabilization", "strategy", "force_limit", "min_singular_value"});
-  TrackingSpec tr;
-  tr.enabled = true;
-  tr.model = t.text("model");
-  tr.where = t.child("model").where();
-  // The trajectory's parameters are the model's too; they are kept apart in scenes for reading.
-  for (const char* section : {"parameters", "trajectory"})
-    if (t.has(section)) {
-      const auto p = read_parameters(t.child(section));
-      tr.parameters.insert(tr.parameters.end(), p.begin(), p.end());
-    }
-  if (const ModelFactory* f = find_builtin_model(tr.model)) {
-    check_parameter_names(t, "parameters", *f);
-    check_parameter_names(t, "trajectory", *f);
-  } else if (tr.model.empty()) {
-    t.child("model").fail("must name a model");
-  }
-  if (t.has("stabilization")) {
-    const Reader st = t.child("stabilization");
-    st.allow_only({"zeta", "omega"});
-    tr.zeta = st.non_negative("zeta", 1.0);
-    tr.stabilization_omega = st.non_negative("omega", 0.0);
-  }
-  tr.force_limit = t.positive("force_limit", tr.force_limit);
-  tr.min_singular_value = t.non_negative("min_singular_value", tr.min_singular_value);
-  tr.strategy = t.text("strategy", "cholesky");
-  if (tr.strategy != "cholesky" && tr.strategy != "svd" && tr.strategy != "cod" && tr.strategy != "damped")
-    t.child("strategy").fail("unknown strategy '" + tr.strategy + "' (known: cholesky, svd, cod, damped)");
-  return tr;
-}
-
 // plant.engine (other than gausstrack): which engine, its model file, its step and integrator, and
 // the effects it may simulate. The coordinates are the model's joints, by name.
 void read_engine(const Reader& plant, Scene& s) {
@@ -430,7 +190,7 @@ Scene read_scene(const Reader& root) {
     if (const ModelFactory* f = find_builtin_model(s.plant_model)) {
       if (f->dof != n)
         plant.child("coordinates").fail("model '" + s.plant_model + "' has " + std::to_string(f->dof) + " coordinates, the plant lists " + std::to_string(n));
-      check_parameter_names(plant, "parameters", *f);
+      check_parameter_names(plant, "parameters", f->name, f->parameter_names);
     }
   } else {
     if (plant.has("parameters")) plant.child("parameters").fail("parameters belong to a plant model (plant.model)");
@@ -554,62 +314,14 @@ Scene read_scene(const Reader& root) {
 
 }  // namespace
 
-namespace {
-
-// Parses YAML text and applies the overrides; the readers then see one tree.
-Reader parse_root(const std::string& yaml_text, const std::string& name, const std::vector<std::string>& overrides) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    throw SceneError(name + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
-  }
-  if (!root.IsMap()) throw SceneError(name + ":1: must be a mapping of keys to values");
-  auto overridden = std::make_shared<std::set<std::string>>();
-  for (const std::string& o : overrides) apply_override(root, o, name, *overridden);
-  return Reader(root, "", std::make_shared<const std::string>(name), overridden);
-}
-
-std::string read_file(const std::string& path, const char* what) {
-  std::ifstream in(path);
-  if (!in) throw SceneError(path + ": cannot open " + what);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-}  // namespace
-
-// Any yaml-cpp error the readers did not turn into a message of their own (a conversion of a
-// node of an unexpected kind) still ends as a SceneError naming the file and the line.
-namespace {
-template <typename F>
-auto reading(const std::string& name, F&& read) {
-  try {
-    return read();
-  } catch (const YAML::Exception& e) {
-    throw SceneError(name + ":" + std::to_string(e.mark.line + 1) + ": cannot be read: " + e.msg);
-  }
-}
-}  // namespace
-
 Scene parse_scene(const std::string& yaml_text, const std::string& name, const std::vector<std::string>& overrides) {
-  Scene s = reading(name, [&] { return read_scene(parse_root(yaml_text, name, overrides)); });
+  Scene s = tracking::reading(name, [&] { return read_scene(tracking::parse_root(yaml_text, name, overrides)); });
   s.file = name;
   return s;
 }
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
-  return parse_scene(read_file(path, "scene file"), path, overrides);
-}
-
-TrackingSpec parse_tracking(const std::string& yaml_text, const std::string& name,
-                            const std::vector<std::string>& overrides) {
-  return reading(name, [&] { return read_tracking(parse_root(yaml_text, name, overrides).child("tracking")); });
-}
-
-TrackingSpec load_tracking(const std::string& path, const std::vector<std::string>& overrides) {
-  return parse_tracking(read_file(path, "configuration file"), path, overrides);
+  return parse_scene(tracking::read_file(path, "scene file"), path, overrides);
 }
 
 }  // namespace gausstrack::plant_sim

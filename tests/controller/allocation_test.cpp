@@ -43,16 +43,6 @@ TEST(AllocationDeathTest, EigenNoMallocCatchesADynamicMatrix) {
                "");
 }
 
-// Why the COD strategy carries its own solve: Eigen's COD::solve allocates even for fixed sizes.
-TEST(Allocation, EigenCompleteOrthogonalSolveAllocatesForFixedSizes) {
-  RandomSource<double> rng(1);
-  const Eigen::Matrix<double, 3, 6> b = rng.matrix<3, 6>();
-  Eigen::CompleteOrthogonalDecomposition<Eigen::Matrix<double, 3, 6>> cod(b);
-  const Eigen::Vector3d r = rng.matrix<3, 1>();
-  Eigen::Matrix<double, 6, 1> y;
-  EXPECT_GE(support::allocations_during([&] { y = cod.solve(r); }), 1);
-}
-
 template <int N, int P>
 void expect_solver_allocation_free(const RandomSystem<N, P>& sys, InverseStrategy s, double damping = 0) {
   SolverOptions<double> o;

@@ -116,7 +116,7 @@ TEST(SingularConfigurations, EveryStrategyHonoursTheFloor) {
       const Eigen::Vector4d f = rng.matrix<4, 1>(), Q = rng.matrix<4, 1>();
       const Eigen::Vector2d g = rng.matrix<2, 1>();
       ASSERT_EQ(solver.solve(Eigen::Matrix4d::Identity(), f, Q, D, g, sol), Status::kOk);
-      const bool below = Eigen::JacobiSVD<Eigen::Matrix<double, 2, 4>>(D).singularValues()(1) < floor;
+      const bool below = Eigen::JacobiSVD<Eigen::MatrixXd>(Eigen::MatrixXd(D)).singularValues()(1) < floor;
       EXPECT_EQ(sol.diagnostics.has(warning::kNearSingular), below) << to_string(s) << " sigma " << smallest;
       flagged += below;
       const double bound = (g - D * (Q - f)).norm() / floor;  // A = I: ||A^(1/2)|| = 1, a = Q - f

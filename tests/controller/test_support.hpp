@@ -77,6 +77,22 @@ double inf_norm(const Eigen::MatrixBase<D>& m) {
   return m.size() == 0 ? 0.0 : static_cast<double>(m.cwiseAbs().maxCoeff());
 }
 
+/// The oracles below factor at dynamic sizes: one instantiation of each Eigen decomposition serves
+/// every size a test file uses, which keeps the test build light.
+template <typename Scalar>
+using DynamicMatrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+
+/// Moore-Penrose inverse by Eigen's SVD: singular values <= tol * sigma_max count as zero.
+template <typename Scalar>
+DynamicMatrix<Scalar> dynamic_pseudo_inverse(const DynamicMatrix<Scalar>& m, Scalar tol) {
+  const Eigen::JacobiSVD<DynamicMatrix<Scalar>> svd(m, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const auto& sigma = svd.singularValues();
+  DynamicMatrix<Scalar> inverse = DynamicMatrix<Scalar>::Zero(m.cols(), m.rows());
+  for (Eigen::Index i = 0; i < sigma.size(); ++i)
+    if (sigma(i) > tol * sigma(0)) inverse += svd.matrixV().col(i) * svd.matrixU().col(i).transpose() / sigma(i);
+  return inverse;
+}
+
 /// One random constrained system of fixed sizes.
 template <int N, int P, typename Scalar = double>
 struct RandomSystem {
@@ -102,8 +118,9 @@ class RandomSource {
 
   template <int N>
   Eigen::Matrix<Scalar, N, N> orthogonal() {
-    Eigen::HouseholderQR<Eigen::Matrix<Scalar, N, N>> qr(matrix<N, N>());
-    return qr.householderQ();
+    // Dynamic-size decomposition: compiled once for every size the tests draw.
+    const Eigen::HouseholderQR<DynamicMatrix<Scalar>> qr(DynamicMatrix<Scalar>(matrix<N, N>()));
+    return Eigen::Matrix<Scalar, N, N>(qr.householderQ());
   }
 
   /// Symmetric positive definite with eigenvalues log-uniform in [scale/cond, scale].
@@ -146,31 +163,34 @@ class RandomSource {
 template <int N, int P, typename Scalar>
 Eigen::Matrix<Scalar, N, 1> compact_form_force(const RandomSystem<N, P, Scalar>& s,
                                                Scalar tol = Scalar(1e-10)) {
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, N, N>> eig(s.A);
-  const Eigen::Matrix<Scalar, N, 1> a = s.A.llt().solve(s.Q - s.f);
-  const Eigen::Matrix<Scalar, P, N> b = s.D * eig.operatorInverseSqrt();
-  return eig.operatorSqrt() * reference::pseudo_inverse(b, tol) * (s.g - s.D * a);
+  using M = DynamicMatrix<Scalar>;
+  const M A = s.A, D = s.D;
+  const Eigen::SelfAdjointEigenSolver<M> eig(A);
+  const M a = A.llt().solve(M(s.Q - s.f));
+  const M b = D * eig.operatorInverseSqrt();
+  return Eigen::Matrix<Scalar, N, 1>(eig.operatorSqrt() * dynamic_pseudo_inverse<Scalar>(b, tol) * (M(s.g) - D * a));
 }
 
 /// Lagrange multipliers: [A -D^T; D 0] [q''; mu] = [Q - f; g], Q' = D^T mu (full row rank D).
 template <int N, int P, typename Scalar>
 std::pair<Eigen::Matrix<Scalar, N, 1>, Eigen::Matrix<Scalar, N, 1>> kkt_solution(
     const RandomSystem<N, P, Scalar>& s) {
-  Eigen::Matrix<Scalar, N + P, N + P> k = Eigen::Matrix<Scalar, N + P, N + P>::Zero();
-  k.template topLeftCorner<N, N>() = s.A;
-  k.template topRightCorner<N, P>() = -s.D.transpose();
-  k.template bottomLeftCorner<P, N>() = s.D;
-  Eigen::Matrix<Scalar, N + P, 1> rhs;
+  DynamicMatrix<Scalar> k = DynamicMatrix<Scalar>::Zero(N + P, N + P);
+  k.topLeftCorner(N, N) = s.A;
+  k.topRightCorner(N, P) = -s.D.transpose();
+  k.bottomLeftCorner(P, N) = s.D;
+  DynamicMatrix<Scalar> rhs(N + P, 1);
   rhs << s.Q - s.f, s.g;
-  const Eigen::Matrix<Scalar, N + P, 1> x = k.fullPivLu().solve(rhs);
-  return {x.template head<N>(), s.D.transpose() * x.template tail<P>()};
+  const DynamicMatrix<Scalar> x = k.fullPivLu().solve(rhs);
+  const Eigen::Matrix<Scalar, P, 1> mu = x.bottomRows(P);
+  return {x.topRows(N), s.D.transpose() * mu};
 }
 
 /// Gauss's function, eq. (14): (A q'' + f - Q)^T A^-1 (A q'' + f - Q).
 template <int N, int P, typename Scalar>
 Scalar gauss_function(const RandomSystem<N, P, Scalar>& s, const Eigen::Matrix<Scalar, N, 1>& qdd) {
-  const Eigen::Matrix<Scalar, N, 1> r = s.A * qdd + s.f - s.Q;
-  return r.dot(s.A.llt().solve(r));
+  const DynamicMatrix<Scalar> r = s.A * qdd + s.f - s.Q;
+  return (r.transpose() * DynamicMatrix<Scalar>(s.A).llt().solve(r))(0, 0);
 }
 
 /// A random v with D v = 0 (projection of a random vector on the null space of D).
@@ -178,7 +198,8 @@ template <int N, int P, typename Scalar>
 Eigen::Matrix<Scalar, N, 1> null_space_vector(const Eigen::Matrix<Scalar, P, N>& D,
                                               RandomSource<Scalar>& rng) {
   const Eigen::Matrix<Scalar, N, 1> w = rng.template matrix<N, 1>();
-  return w - reference::pseudo_inverse(D, Scalar(1e-12)) * (D * w);
+  const DynamicMatrix<Scalar> pinv = dynamic_pseudo_inverse<Scalar>(D, Scalar(1e-12));
+  return w - Eigen::Matrix<Scalar, N, 1>(pinv * (D * w));
 }
 
 }  // namespace gausstrack::test

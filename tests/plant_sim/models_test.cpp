@@ -216,7 +216,7 @@ TEST(Models, ScenesNamingModelsAreCheckedWithFileLineAndKey) {
   // The controller's own configuration: the tracking section alone, whatever else the file holds.
   const TrackingSpec spec = load_tracking(arm, {"tracking.strategy=svd"});
   EXPECT_EQ(spec.model, "planar_arm");
-  EXPECT_EQ(spec.strategy, "svd");
+  EXPECT_EQ(spec.strategy, InverseStrategy::kSvd);
   EXPECT_EQ(spec.stabilization_omega, 20.0);
   const TrackingSpec alone = parse_tracking("tracking: {model: pendulum, parameters: {mu: -0.1}}", "own.yaml");
   EXPECT_EQ(alone.parameter("mu", 0), -0.1);

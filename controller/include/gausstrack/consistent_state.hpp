@@ -1,11 +1,11 @@
 // Initial conditions that satisfy a model's constraints (the paper's examples start on them).
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <cmath>
 
 #include "gausstrack/model.hpp"
+#include "gausstrack/small_dense.hpp"
 
 namespace gausstrack {
 
@@ -22,9 +22,12 @@ bool make_consistent(const M& m, Eigen::Matrix<typename M::Scalar, M::kDof, 1>& 
   constexpr int P = M::kConstraints;
   TermsOf<M> terms;
   auto solve = [&](const Eigen::Matrix<S, P, 1>& r, Eigen::Matrix<S, M::kDof, 1>& x) {
-    const Eigen::LDLT<Eigen::Matrix<S, P, P>> gram(terms.constraint_matrix * terms.constraint_matrix.transpose());
-    if (gram.info() != Eigen::Success || !(gram.vectorD().cwiseAbs().minCoeff() > S(0))) return false;
-    const Eigen::Matrix<S, M::kDof, 1> step = terms.constraint_matrix.transpose() * gram.solve(r);
+    Eigen::Matrix<S, P, P> gram = terms.constraint_matrix * terms.constraint_matrix.transpose();
+    if (!small_dense::cholesky_in_place(gram)) return false;  // D D^T = L L^T
+    Eigen::Matrix<S, P, 1> w = r;
+    small_dense::solve_lower_in_place(gram, w);
+    small_dense::solve_lower_transposed_in_place(gram, w);
+    const Eigen::Matrix<S, M::kDof, 1> step = terms.constraint_matrix.transpose() * w;
     if (!step.allFinite()) return false;
     x -= step;
     return true;

@@ -32,28 +32,32 @@
 //   bound 1 / (||G||_1 ||L_G^-1||_F^2) (G = B B^T = L_G L_G^T; never above the true reciprocal
 //   condition number) falls below `fallback_rcond` the call answers by kSvd instead and sets
 //   warning::kFellBackToSvd.
-// - kSvd: Moore-Penrose inverse by SVD: Householder QR B^T = Q [R; 0], then two-sided Jacobi SVD
-//   of the square P x P factor R = U S V^T (the singular values of B), so B^+ = Q_1 U S^+ V^T.
-//   Singular values sigma_i <= rank_tolerance * sigma_max are treated as zero.
-// - kCompleteOrthogonal: complete orthogonal decomposition B Pi = Q [T11 0; 0 0] Z, rank decided by
-//   the same relative tolerance on the column-pivoted QR diagonal; minimum-norm solve written here
-//   with a fixed-size workspace (Eigen's COD::solve allocates a temporary even for fixed sizes).
+// - kSvd: Moore-Penrose inverse by SVD: one-sided Jacobi SVD B^T = U S V^T (the singular values
+//   of B, small ones to about eps * sigma_max), so B^+ = U S^+ V^T. Singular values
+//   sigma_i <= rank_tolerance * sigma_max are treated as zero.
+// - kCompleteOrthogonal: complete orthogonal decomposition B Pi = Q [S^T 0; 0 0] Z^T from a
+//   column-pivoted Householder QR, rank decided by the same relative tolerance on the QR's
+//   diagonal; minimum-norm least-squares solve.
+// Both rank-revealing kernels are written with plain loops (rank_revealing.hpp) and scale B by a
+// power of two first, so that any finite B is decomposed without overflow.
 // - kDampedLeastSquares: y = B^T (B B^T + lambda^2 I)^-1 r. Each singular direction sigma_i of B
 //   meets only sigma_i^2 / (sigma_i^2 + lambda^2) of its constraint, so D q'' = g holds with a
 //   relative error of about lambda^2 / sigma_min^2 in exchange for a force bounded by
-//   |r| / (2 lambda) near singular configurations. lambda = 0 gives the plain normal equations
-//   (falling back to kSvd when singular).
+//   |r| / (2 lambda) near singular configurations. The normal equations answer under the same
+//   condition test as the default; when B B^T + lambda^2 I fails it, the same filter is applied
+//   through the SVD, y = sum_i u_i sigma_i / (sigma_i^2 + lambda^2) (v_i^T r) (warning::
+//   kFellBackToSvd). lambda = 0 gives the normal equations, or kSvd's answer when they are
+//   singular or ill-conditioned.
 #pragma once
 
 #include <Eigen/Core>
-#include <Eigen/QR>
-#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
 #include "gausstrack/mass_matrix.hpp"
+#include "gausstrack/rank_revealing.hpp"
 #include "gausstrack/small_dense.hpp"
 #include "gausstrack/status.hpp"
 
@@ -86,7 +90,7 @@ struct SolverOptions {
   /// sigma_i > rank_tolerance * sigma_max. A value <= 0 selects max(N, P) * eps, the LAPACK and
   /// MATLAB `rank` convention.
   Scalar rank_tolerance = Scalar(-1);
-  /// The Cholesky path answers only when a lower bound on the reciprocal condition number of
+  /// The normal equations (default and damped) answer only when a lower bound on the reciprocal condition number of
   /// D A^-1 D^T (at most P^1.5 times below it, so the fallback can come from cond(B) about
   /// 1e3 / P^0.75 on) is at least this: cond(D A^(-1/2)) up to about 1e3 for double (normal-equations error
   /// eps * cond^2 below about 2e-10), about 30 for float.
@@ -179,80 +183,14 @@ class ConstraintSolver {
   Status solve(const Eigen::MatrixBase<DA>& A, const Eigen::MatrixBase<Df>& f,
                const Eigen::MatrixBase<DQ>& Q, const Eigen::MatrixBase<DD>& D,
                const Eigen::MatrixBase<Dg>& g, Solution& out) noexcept {
-    ready_ = false;
-    out.diagnostics = SolveDiagnostics<Scalar>{};
-    SolveDiagnostics<Scalar>& diag = out.diagnostics;
-
-    // A and D equal to the factored ones are finite and need no new factorization.
-    const bool same_mass = factored_ && options_.reuse_factorization && mass_equals(A);
-    const bool same_factors = same_mass && D == d_key_;
-    std::uint32_t bad = 0;
-    if (!same_mass && !mass_finite(A)) bad |= input::kMassMatrix;
-    if (!f.allFinite()) bad |= input::kNonlinearForce;
-    if (!Q.allFinite()) bad |= input::kAppliedForce;
-    if (!same_factors && !D.allFinite()) bad |= input::kConstraintMatrix;
-    if (!g.allFinite()) bad |= input::kConstraintRhs;
-    if (bad != 0) {
-      diag.non_finite_inputs = bad;
-      return fail(out, Status::kNonFiniteInput);
-    }
-
-    if (!same_factors) {
-      factored_ = false;
-      if (!same_mass && !factor_mass(A)) return fail(out, Status::kMassMatrixNotPositiveDefinite);
-      d_key_ = D;
-      d_norm2_ = D.squaredNorm();
-      set_bt(D);  // B^T = L^-1 D^T
-      factor_diagnostics_ = SolveDiagnostics<Scalar>{};
-      // B or its factors overflowed (entries near the range limit): nothing below could be
-      // trusted, and a factorization of non-finite numbers is not kept.
-      if (!bt_.allFinite() || !factorize(factor_diagnostics_)) return fail(out, Status::kNonFiniteResult);
-      factored_ = true;
-    }
-    diag = factor_diagnostics_;
-
-    // a = A^-1 (Q - f); right sides of the two eq. (32) terms, solved together.
-    out.unconstrained_acceleration = Q - f;
-    solve_mass_in_place(out.unconstrained_acceleration);
-    Eigen::Matrix<Scalar, P, 2> rhs;
-    rhs.col(0).noalias() = -(D.lazyProduct(out.unconstrained_acceleration));
-    rhs.col(1) = g;
-    Eigen::Matrix<Scalar, N, 2> y;
-    apply_pseudo_inverse(rhs, y);
-
-    VectorN dq = y.col(0) + y.col(1);
-    apply_l_in_place(y);  // L y
-    out.force_from_impressed = y.col(0);
-    out.force_from_rhs = y.col(1);
-    out.constraint_force = out.force_from_impressed + out.force_from_rhs;
-    solve_lt_in_place(dq);  // L^-T y
-    out.acceleration = out.unconstrained_acceleration + dq;
-
-    // Both parts are finite when their sum is (an Inf or NaN part makes the sum Inf or NaN).
-    if (!out.acceleration.allFinite() || !out.constraint_force.allFinite()) {
-      return fail(out, Status::kNonFiniteResult);
-    }
-
-    // Squared norms: one square root (the reported residual), none for the scale.
-    const Scalar residual2 = (D.lazyProduct(out.acceleration) - g).squaredNorm();
-    const Scalar scale2 = g.squaredNorm() + d_norm2_ * out.acceleration.squaredNorm();
-    bool met;
-    if (std::isfinite(residual2) && std::isfinite(scale2)) {
-      diag.residual_norm = std::sqrt(residual2);
-      met = !(residual2 > options_.residual_tolerance * options_.residual_tolerance * scale2);
-    } else {
-      // Squares beyond the range (norms from about 1e154): the same test on norms taken without
-      // squaring. A residual that is itself not finite (D q'' overflowed) cannot be verified.
-      diag.residual_norm = (D * out.acceleration - g).stableNorm();
-      met = std::isfinite(diag.residual_norm) &&
-            !(diag.residual_norm > options_.residual_tolerance * unsquared_scale(g, out.acceleration));
-      if (!std::isfinite(diag.residual_norm)) diag.residual_norm = std::numeric_limits<Scalar>::infinity();
-    }
-    if (!met) diag.warnings |= warning::kConstraintsNotMet;
-    if (diag.rank < P) diag.warnings |= warning::kRankDeficient;
-    if (diag.condition_estimate > options_.warn_condition) diag.warnings |= warning::kIllConditioned;
-    ready_ = true;
-    return diag.status;
+    // Plain matrices: references to the arguments when they are plain matrices already, else
+    // their values. The work below runs on their contiguous storage.
+    const MatrixNN& a_plain = A.derived();
+    const VectorN& f_plain = f.derived();
+    const VectorN& q_plain = Q.derived();
+    const MatrixPN& d_plain = D.derived();
+    const VectorP& g_plain = g.derived();
+    return solve_plain(a_plain, f_plain, q_plain, d_plain, g_plain, out);
   }
 
   /// Constraint force L B^+ rhs that the last successful solve's factorization gives for another
@@ -266,25 +204,127 @@ class ConstraintSolver {
   }
 
  private:
+  Status solve_plain(const MatrixNN& A, const VectorN& f, const VectorN& Q, const MatrixPN& D, const VectorP& g,
+                     Solution& out) noexcept {
+    using small_dense::all_finite;
+    using small_dense::squared_norm;
+    ready_ = false;
+    out.diagnostics = SolveDiagnostics<Scalar>{};
+    SolveDiagnostics<Scalar>& diag = out.diagnostics;
+
+    // A and D equal to the factored ones are finite and need no new factorization.
+    const bool same_mass = factored_ && options_.reuse_factorization && mass_equals(A);
+    const bool same_factors = same_mass && small_dense::all_equal(D.data(), d_key_.data(), P * N);
+    std::uint32_t bad = 0;
+    if (!same_mass && !mass_finite(A)) bad |= input::kMassMatrix;
+    if (!all_finite(f.data(), N)) bad |= input::kNonlinearForce;
+    if (!all_finite(Q.data(), N)) bad |= input::kAppliedForce;
+    if (!same_factors && !all_finite(D.data(), P * N)) bad |= input::kConstraintMatrix;
+    if (!all_finite(g.data(), P)) bad |= input::kConstraintRhs;
+    if (bad != 0) {
+      diag.non_finite_inputs = bad;
+      return fail(out, Status::kNonFiniteInput);
+    }
+
+    if (!same_factors) {
+      factored_ = false;
+      if (!same_mass && !factor_mass(A)) return fail(out, Status::kMassMatrixNotPositiveDefinite);
+      d_key_ = D;
+      d_norm2_ = squared_norm(D.data(), P * N);
+      set_bt(D);  // B^T = L^-1 D^T
+      factor_diagnostics_ = SolveDiagnostics<Scalar>{};
+      // B or its factors overflowed (entries near the range limit): nothing below could be
+      // trusted, and a factorization of non-finite numbers is not kept.
+      if (!all_finite(bt_.data(), N * P) || !factorize(factor_diagnostics_)) {
+        return fail(out, Status::kNonFiniteResult);
+      }
+      factored_ = true;
+    }
+    diag = factor_diagnostics_;
+
+    // a = A^-1 (Q - f); right sides of the two eq. (32) terms, -D a and g, solved together.
+    VectorN& a = out.unconstrained_acceleration;
+    for (int i = 0; i < N; ++i) a(i) = Q(i) - f(i);
+    solve_mass_in_place(a);
+    Eigen::Matrix<Scalar, P, 2> rhs;
+    small_dense::multiply(D.data(), P, N, a.data(), rhs.data());
+    for (int i = 0; i < P; ++i) {
+      rhs(i, 0) = -rhs(i, 0);
+      rhs(i, 1) = g(i);
+    }
+    Eigen::Matrix<Scalar, N, 2> y;
+    apply_pseudo_inverse(rhs, y);
+
+    VectorN dq;
+    for (int i = 0; i < N; ++i) dq(i) = y(i, 0) + y(i, 1);
+    apply_l_in_place(y);  // L y
+    for (int i = 0; i < N; ++i) {
+      out.force_from_impressed(i) = y(i, 0);
+      out.force_from_rhs(i) = y(i, 1);
+      out.constraint_force(i) = y(i, 0) + y(i, 1);
+    }
+    solve_lt_in_place(dq);  // L^-T y
+    for (int i = 0; i < N; ++i) out.acceleration(i) = a(i) + dq(i);
+
+    // Both parts are finite when their sum is (an Inf or NaN part makes the sum Inf or NaN).
+    if (!all_finite(out.acceleration.data(), N) || !all_finite(out.constraint_force.data(), N)) {
+      return fail(out, Status::kNonFiniteResult);
+    }
+
+    // Squared norms: one square root (the reported residual), none for the scale.
+    VectorP residual;
+    small_dense::multiply(D.data(), P, N, out.acceleration.data(), residual.data());
+    for (int i = 0; i < P; ++i) residual(i) -= g(i);
+    const Scalar residual2 = squared_norm(residual.data(), P);
+    const Scalar scale2 = squared_norm(g.data(), P) + d_norm2_ * squared_norm(out.acceleration.data(), N);
+    bool met;
+    if (std::isfinite(residual2) && std::isfinite(scale2)) {
+      diag.residual_norm = std::sqrt(residual2);
+      met = !(residual2 > options_.residual_tolerance * options_.residual_tolerance * scale2);
+    } else {
+      // Squares beyond the range (norms from about 1e154): the same test on norms taken without
+      // squaring. A residual that is itself not finite (D q'' overflowed) cannot be verified.
+      diag.residual_norm = small_dense::scaled_norm(residual.data(), P);
+      met = std::isfinite(diag.residual_norm) &&
+            !(diag.residual_norm > options_.residual_tolerance * unsquared_scale(g, out.acceleration));
+      if (!std::isfinite(diag.residual_norm)) diag.residual_norm = std::numeric_limits<Scalar>::infinity();
+    }
+    if (!met) diag.warnings |= warning::kConstraintsNotMet;
+    if (diag.rank < P) diag.warnings |= warning::kRankDeficient;
+    if (diag.condition_estimate > options_.warn_condition) diag.warnings |= warning::kIllConditioned;
+    ready_ = true;
+    return diag.status;
+  }
+
   // --- The mass matrix's factor L (A = L L^T), dense or diagonal. ---
-  template <typename DA>
-  bool mass_equals(const Eigen::MatrixBase<DA>& A) const noexcept {
-    if constexpr (kMass == MassMatrix::kDiagonal) return A.diagonal() == mass_diagonal_;
-    else return A == mass_key_;
-  }
-  template <typename DA>
-  static bool mass_finite(const Eigen::MatrixBase<DA>& A) noexcept {
-    if constexpr (kMass == MassMatrix::kDiagonal) return A.diagonal().allFinite();
-    else return A.allFinite();
-  }
-  template <typename DA>
-  bool factor_mass(const Eigen::MatrixBase<DA>& A) noexcept {
+  bool mass_equals(const MatrixNN& A) const noexcept {
     if constexpr (kMass == MassMatrix::kDiagonal) {
-      mass_diagonal_ = A.diagonal();
-      if (!(mass_diagonal_.array() > Scalar(0)).all()) return false;
-      sqrt_mass_ = mass_diagonal_.cwiseSqrt();
-      inverse_sqrt_mass_ = sqrt_mass_.cwiseInverse();
-      inverse_mass_ = mass_diagonal_.cwiseInverse();
+      for (int i = 0; i < N; ++i)
+        if (!(A(i, i) == mass_diagonal_(i))) return false;
+      return true;
+    } else {
+      return small_dense::all_equal(A.data(), mass_key_.data(), N * N);
+    }
+  }
+  static bool mass_finite(const MatrixNN& A) noexcept {
+    if constexpr (kMass == MassMatrix::kDiagonal) {
+      for (int i = 0; i < N; ++i)
+        if (!std::isfinite(A(i, i))) return false;
+      return true;
+    } else {
+      return small_dense::all_finite(A.data(), N * N);
+    }
+  }
+  bool factor_mass(const MatrixNN& A) noexcept {
+    if constexpr (kMass == MassMatrix::kDiagonal) {
+      for (int i = 0; i < N; ++i) {
+        const Scalar m = A(i, i);
+        mass_diagonal_(i) = m;
+        if (!(m > Scalar(0))) return false;
+        sqrt_mass_(i) = std::sqrt(m);
+        inverse_sqrt_mass_(i) = Scalar(1) / sqrt_mass_(i);
+        inverse_mass_(i) = Scalar(1) / m;
+      }
       return true;
     } else {
       mass_key_ = A;
@@ -292,40 +332,45 @@ class ConstraintSolver {
       return small_dense::cholesky_in_place(mass_l_);
     }
   }
-  template <typename DD>
-  void set_bt(const Eigen::MatrixBase<DD>& D) noexcept {
+  void set_bt(const MatrixPN& D) noexcept {  // B^T = L^-1 D^T
+    for (int i = 0; i < P; ++i)
+      for (int j = 0; j < N; ++j) bt_(j, i) = D(i, j);
     if constexpr (kMass == MassMatrix::kDiagonal) {
-      bt_.noalias() = inverse_sqrt_mass_.asDiagonal() * D.transpose();
+      for (int i = 0; i < P; ++i)
+        for (int j = 0; j < N; ++j) bt_(j, i) *= inverse_sqrt_mass_(j);
     } else {
-      bt_ = D.transpose();
       small_dense::solve_lower_in_place(mass_l_, bt_);
     }
   }
   void solve_mass_in_place(VectorN& x) const noexcept {  // x = A^-1 x
-    if constexpr (kMass == MassMatrix::kDiagonal) x.array() *= inverse_mass_.array();
-    else {
+    if constexpr (kMass == MassMatrix::kDiagonal) {
+      for (int i = 0; i < N; ++i) x(i) *= inverse_mass_(i);
+    } else {
       small_dense::solve_lower_in_place(mass_l_, x);
       small_dense::solve_lower_transposed_in_place(mass_l_, x);
     }
   }
   template <int K>
   void apply_l_in_place(Eigen::Matrix<Scalar, N, K>& x) const noexcept {  // x = L x
-    if constexpr (kMass == MassMatrix::kDiagonal) x = sqrt_mass_.asDiagonal() * x;
-    else small_dense::multiply_lower_in_place(mass_l_, x);
+    if constexpr (kMass == MassMatrix::kDiagonal) {
+      for (int k = 0; k < K; ++k)
+        for (int i = 0; i < N; ++i) x(i, k) *= sqrt_mass_(i);
+    } else {
+      small_dense::multiply_lower_in_place(mass_l_, x);
+    }
   }
   void solve_lt_in_place(VectorN& x) const noexcept {  // x = L^-T x
-    if constexpr (kMass == MassMatrix::kDiagonal) x.array() *= inverse_sqrt_mass_.array();
-    else small_dense::solve_lower_transposed_in_place(mass_l_, x);
+    if constexpr (kMass == MassMatrix::kDiagonal) {
+      for (int i = 0; i < N; ++i) x(i) *= inverse_sqrt_mass_(i);
+    } else {
+      small_dense::solve_lower_transposed_in_place(mass_l_, x);
+    }
   }
 
   // |g| + |D| |q''| without squaring (for |D|^2 |q''|^2 beyond the range; rare, so not cached).
-  template <typename Dg>
-  Scalar unsquared_scale(const Eigen::MatrixBase<Dg>& g, const VectorN& acceleration) const noexcept {
-    // Not d_key_.stableNorm(): Eigen 3.4.0 takes column 0 for every column of a fixed-size
-    // matrix there (and asserts in debug builds).
-    const Scalar d_max = d_key_.cwiseAbs().maxCoeff();
-    const Scalar d_norm = d_max > Scalar(0) ? d_max * (d_key_ / d_max).norm() : Scalar(0);
-    return g.stableNorm() + d_norm * acceleration.stableNorm();
+  Scalar unsquared_scale(const VectorP& g, const VectorN& acceleration) const noexcept {
+    return small_dense::scaled_norm(g.data(), P) +
+           small_dense::scaled_norm(d_key_.data(), P * N) * small_dense::scaled_norm(acceleration.data(), N);
   }
 
   Status fail(Solution& out, Status status) noexcept {
@@ -357,11 +402,11 @@ class ConstraintSolver {
     }
     switch (options_.strategy) {
       case InverseStrategy::kCholeskyWithFallback:
-        if (factorize_normal_equations(Scalar(0), true, diag)) return true;
+        if (factorize_normal_equations(Scalar(0), diag)) return true;
         diag.warnings |= warning::kFellBackToSvd;
         return factorize_svd(diag);
       case InverseStrategy::kDampedLeastSquares:
-        if (factorize_normal_equations(options_.damping * options_.damping, false, diag)) return true;
+        if (factorize_normal_equations(options_.damping * options_.damping, diag)) return true;
         diag.warnings |= warning::kFellBackToSvd;
         return factorize_svd(diag);
       case InverseStrategy::kSvd:
@@ -386,11 +431,21 @@ class ConstraintSolver {
   // False when G is not finite (an overflowed Gram matrix would look well conditioned) or its
   // Cholesky factorization fails.
   bool factor_gram(Scalar lambda2, Scalar& norm1, Scalar& inverse_norm2) noexcept {
-    MatrixPP gram;
-    gram.noalias() = bt_.transpose().lazyProduct(bt_);  // coefficient-based: no blocked product
-    gram.diagonal().array() += lambda2;
-    if (!gram.allFinite()) return false;
-    norm1 = gram.cwiseAbs().colwise().sum().maxCoeff();
+    MatrixPP gram;  // B B^T: dot products of B^T's columns
+    for (int j = 0; j < P; ++j)
+      for (int i = j; i < P; ++i) {
+        Scalar dot(0);
+        for (int k = 0; k < N; ++k) dot += bt_(k, i) * bt_(k, j);
+        gram(i, j) = gram(j, i) = dot;
+      }
+    for (int i = 0; i < P; ++i) gram(i, i) += lambda2;
+    if (!small_dense::all_finite(gram.data(), P * P)) return false;
+    norm1 = Scalar(0);  // ||G||_1, the largest column sum of |G|
+    for (int j = 0; j < P; ++j) {
+      Scalar column(0);
+      for (int i = 0; i < P; ++i) column += std::abs(gram(i, j));
+      norm1 = std::max(norm1, column);
+    }
     if (!small_dense::cholesky_in_place(gram)) return false;
     inverse_norm2 = small_dense::invert_lower(gram, gram_l_inv_);
     return true;
@@ -398,14 +453,13 @@ class ConstraintSolver {
 
 
   // Cholesky of B B^T + lambda2 I = D A^-1 D^T + lambda2 I. Returns false when it is not usable.
-  bool factorize_normal_equations(Scalar lambda2, bool require_well_conditioned,
-                                  SolveDiagnostics<Scalar>& diag) noexcept {
+  bool factorize_normal_equations(Scalar lambda2, SolveDiagnostics<Scalar>& diag) noexcept {
     if constexpr (P == 1) {
       // One row: B B^T is the scalar |b|^2, exactly conditioned (rcond 1); only its size can
       // fail, or a fallback threshold above 1 that no matrix meets.
-      const Scalar gram = bt_.squaredNorm() + lambda2;
+      const Scalar gram = small_dense::squared_norm(bt_.data(), N) + lambda2;
       if (!(gram > Scalar(0)) || !std::isfinite(gram)) return false;
-      if (require_well_conditioned && !(Scalar(1) >= options_.fallback_rcond)) return false;
+      if (!(Scalar(1) >= options_.fallback_rcond)) return false;
       inverse_gram_ = Scalar(1) / gram;
       used_ = options_.strategy;
       rank_ = 1;
@@ -422,7 +476,7 @@ class ConstraintSolver {
       // never above G's true reciprocal condition number (and at most P^1.5 times below it): an
       // ill-conditioned G always falls back.
       const Scalar rcond = Scalar(1) / (norm1 * inverse_norm2);
-      if (require_well_conditioned && !(rcond >= options_.fallback_rcond)) return false;
+      if (!(rcond >= options_.fallback_rcond)) return false;
       if (!(rcond > Scalar(0)) || !std::isfinite(rcond)) return false;
       used_ = options_.strategy;
       rank_ = P;
@@ -435,15 +489,14 @@ class ConstraintSolver {
     }
   }
 
+  // One-sided Jacobi SVD of B^T = U S V^T (N x P), so B = V S U^T and B^+ = U S^+ V^T.
   bool factorize_svd(SolveDiagnostics<Scalar>& diag) noexcept {
     used_ = InverseStrategy::kSvd;
-    householder_qr_of_bt();  // B^T = Q [R; 0]
-    MatrixPP r = qr_.template topRows<P>().template triangularView<Eigen::Upper>();
-    // Eigen's SVD refuses a non-finite R and keeps its previous singular values (and from then
-    // on reports InvalidInput for every input of the same size): R is checked here instead.
-    if (!r.allFinite()) return false;
-    svd_.compute(r, Eigen::ComputeFullU | Eigen::ComputeFullV);  // R = U S V^T
-    const auto& s = svd_.singularValues();
+    svd_damping2_ = options_.strategy == InverseStrategy::kDampedLeastSquares ? options_.damping * options_.damping
+                                                                               : Scalar(0);
+    svd_u_ = bt_;
+    if (!small_dense::jacobi_svd_in_place(svd_u_.data(), N, P, svd_sigma_.data(), svd_v_.data())) return false;
+    const VectorP& s = svd_sigma_;
     rank_ = 0;
     if (s(0) > Scalar(0)) {
       const Scalar relative = options_.rank_tolerance * s(0);
@@ -455,34 +508,14 @@ class ConstraintSolver {
     return true;
   }
 
-  // Unblocked Householder QR of B^T in place. Eigen's HouseholderQR would do the same at run
-  // time for these sizes, but compiles its blocked variant too, which dominates build time.
-  void householder_qr_of_bt() noexcept {
-    qr_ = bt_;
-    Eigen::Matrix<Scalar, P, 1> workspace;
-    for (int k = 0; k < P; ++k) {
-      Scalar beta;
-      qr_.col(k).tail(N - k).makeHouseholderInPlace(qr_tau_(k), beta);
-      qr_(k, k) = beta;
-      qr_.bottomRightCorner(N - k, P - k - 1)
-          .applyHouseholderOnTheLeft(qr_.col(k).tail(N - k - 1), qr_tau_(k), workspace.data());
-    }
-  }
-
   bool factorize_cod(SolveDiagnostics<Scalar>& diag) noexcept {
     used_ = InverseStrategy::kCompleteOrthogonal;
-    cod_.setThreshold(options_.rank_tolerance);
-    b_ = bt_.transpose();
-    cod_.compute(b_);
-    if (!cod_.matrixQTZ().allFinite()) return false;
-    rank_ = static_cast<int>(cod_.rank());
-    Scalar hi(0), lo(0);
-    if (rank_ > 0) {
-      const auto t = cod_.matrixT().diagonal().head(rank_).cwiseAbs();
-      hi = t.maxCoeff();
-      lo = t.minCoeff();
-    }
-    set_rank_diagnostics(diag, hi, lo);
+    MatrixPN b;
+    for (int i = 0; i < P; ++i)
+      for (int j = 0; j < N; ++j) b(i, j) = bt_(j, i);
+    if (!small_dense::factor_complete_orthogonal(b.data(), P, N, options_.rank_tolerance, cod_)) return false;
+    rank_ = cod_.rank;
+    set_rank_diagnostics(diag, rank_ > 0 ? cod_.largest_pivot : Scalar(0), cod_.smallest_kept_pivot);
     return true;
   }
 
@@ -502,69 +535,44 @@ class ConstraintSolver {
       case InverseStrategy::kCholeskyWithFallback:
       case InverseStrategy::kDampedLeastSquares: {
         if constexpr (P == 1) {
-          y.noalias() = bt_.lazyProduct(r * inverse_gram_);
+          for (int k = 0; k < K; ++k) {
+            const Scalar c = r(0, k) * inverse_gram_;
+            for (int i = 0; i < N; ++i) y(i, k) = bt_(i, 0) * c;
+          }
         } else {
           Eigen::Matrix<Scalar, P, K> w = r;  // w = G^-1 r = L^-T L^-1 r
           small_dense::multiply_lower_in_place(gram_l_inv_, w);
           small_dense::multiply_lower_transposed_in_place(gram_l_inv_, w);
-          y.noalias() = bt_.lazyProduct(w);
+          for (int k = 0; k < K; ++k) small_dense::multiply(bt_.data(), N, P, w.data() + k * P, y.data() + k * N);
         }
         return;
       }
       case InverseStrategy::kSvd: {
-        // B = V S U^T Q_1^T, so B^+ r = Q_1 sum_i u_i (v_i^T r) / s_i over the kept values.
-        Eigen::Matrix<Scalar, P, K> w = Eigen::Matrix<Scalar, P, K>::Zero();
-        for (int i = 0; i < rank_; ++i) {
-          const Eigen::Matrix<Scalar, 1, K> c =
-              (svd_.matrixV().col(i).transpose() * r) / svd_.singularValues()(i);
-          w.noalias() += svd_.matrixU().col(i) * c;
-        }
+        // B^+ r = sum_i u_i (v_i^T r) / s_i over the kept values.
         y.setZero();
-        y.template topRows<P>() = w;
-        Eigen::Matrix<Scalar, K, 1> workspace;
-        for (int k = P - 1; k >= 0; --k) {  // Q = H_0 H_1 ... H_(P-1)
-          y.bottomRows(N - k).applyHouseholderOnTheLeft(qr_.col(k).tail(N - k - 1), qr_tau_(k),
-                                                        workspace.data());
+        for (int k = 0; k < K; ++k) {
+          for (int i = 0; i < rank_; ++i) {
+            Scalar c(0);
+            for (int j = 0; j < P; ++j) c += svd_v_(j, i) * r(j, k);
+            // sigma / (sigma^2 + lambda^2): 1 / sigma without damping.
+            const Scalar sigma = svd_sigma_(i);
+            c = svd_damping2_ > Scalar(0) ? c * sigma / (sigma * sigma + svd_damping2_) : c / sigma;
+            for (int j = 0; j < N; ++j) y(j, k) += svd_u_(j, i) * c;
+          }
         }
         return;
       }
-      case InverseStrategy::kCompleteOrthogonal:
-        apply_cod_minimum_norm(r, y);
+      case InverseStrategy::kCompleteOrthogonal: {
+        Scalar column[P], work[P];
+        Scalar answer[N];
+        for (int k = 0; k < K; ++k) {
+          for (int i = 0; i < P; ++i) column[i] = r(i, k);
+          small_dense::solve_complete_orthogonal(cod_, column, answer, work);
+          for (int i = 0; i < N; ++i) y(i, k) = answer[i];
+        }
         return;
-    }
-  }
-
-  // Minimum-norm least-squares solve with B Pi = Q [T11 0; 0 0] Z:
-  //   y = Pi Z^T [T11^-1 (Q^T r)_(1:rank); 0].
-  template <int K>
-  void apply_cod_minimum_norm(const Eigen::Matrix<Scalar, P, K>& r,
-                              Eigen::Matrix<Scalar, N, K>& y) const noexcept {
-    y.setZero();
-    if (rank_ == 0) return;
-    Eigen::Matrix<Scalar, P, K> c = r;
-    Eigen::Matrix<Scalar, K, 1> workspace;
-    const auto& qtz = cod_.matrixQTZ();
-    // c = Q^T r, applying the rank leading reflectors of the pivoted QR.
-    for (int k = 0; k < rank_; ++k) {
-      c.bottomRows(P - k).applyHouseholderOnTheLeft(qtz.col(k).tail(P - k - 1),
-                                                     cod_.hCoeffs()(k), workspace.data());
-    }
-    y.topRows(rank_) = c.topRows(rank_);
-    qtz.topLeftCorner(rank_, rank_).template triangularView<Eigen::Upper>().solveInPlace(
-        y.topRows(rank_));
-    // y = Z^T y: the reflectors Z(k) act on rows {k} and {rank, ..., N-1}.
-    const int tail = N - rank_;
-    if (tail > 0) {
-      for (int k = 0; k < rank_; ++k) {
-        if (k != rank_ - 1) y.row(k).swap(y.row(rank_ - 1));
-        y.middleRows(rank_ - 1, tail + 1)
-            .applyHouseholderOnTheLeft(qtz.row(k).tail(tail).transpose(), cod_.zCoeffs()(k),
-                                       workspace.data());
-        if (k != rank_ - 1) y.row(k).swap(y.row(rank_ - 1));
       }
     }
-    const Eigen::Matrix<Scalar, N, K> permuted = y;
-    y.noalias() = cod_.colsPermutation() * permuted;
   }
 
   Options options_;
@@ -579,12 +587,12 @@ class ConstraintSolver {
   SolveDiagnostics<Scalar> factor_diagnostics_;  // what factorize reported
   MatrixNN mass_l_ = MatrixNN::Identity();  // A = L L^T, lower triangle (dense)
   MatrixNP bt_ = MatrixNP::Zero();  // B^T = L^-1 D^T
-  MatrixPN b_ = MatrixPN::Zero();   // B, for the COD
   MatrixPP gram_l_inv_ = MatrixPP::Identity();  // L^-1 for B B^T + lambda^2 I = L L^T
-  MatrixNP qr_ = MatrixNP::Zero();  // B^T = Q [R; 0]: R above, reflectors below the diagonal
-  VectorP qr_tau_ = VectorP::Zero();
-  Eigen::JacobiSVD<MatrixPP, Eigen::NoQRPreconditioner> svd_;  // R = U S V^T
-  Eigen::CompleteOrthogonalDecomposition<MatrixPN> cod_;
+  MatrixNP svd_u_ = MatrixNP::Zero();  // B^T = U S V^T (kSvd)
+  MatrixPP svd_v_ = MatrixPP::Identity();
+  VectorP svd_sigma_ = VectorP::Zero();
+  Scalar svd_damping2_ = Scalar(0);  // lambda^2 when kDampedLeastSquares fell back to the SVD
+  small_dense::CompleteOrthogonal<Scalar, P, N> cod_{};  // B Pi = Q [S^T 0; 0 0] Z^T (kCompleteOrthogonal)
   InverseStrategy used_ = InverseStrategy::kCholeskyWithFallback;
   int rank_ = 0;
   bool ready_ = false;

@@ -19,7 +19,7 @@
 // pass of plain arithmetic. bench/controller/natural_form_bench.cpp measures both on the same
 // constraints (the pendulum's length, the arm's hand) and checks they give the same rows: both
 // are allocation-free for fixed sizes; ours took 0.9x Eigen's time on the pendulum and 0.5x on
-// the arm (README, performance section).
+// the arm (docs/performance.md).
 //
 // Functions a constraint may use: + - * / with jets and scalars, and sin, cos, tan, exp, log,
 // sqrt, pow (scalar exponent), abs, atan, atan2, asin, acos, sinh, cosh, tanh, found by
@@ -50,27 +50,43 @@ struct Jet {
   Jet& operator/=(const Jet& b) { return *this = *this / b; }
 };
 
+// Gradients are combined by plain loops (a x + b y), not Eigen expressions: the same arithmetic,
+// with far less for the compiler to instantiate in every user's constraint.
+template <typename S, int N>
+inline typename Jet<S, N>::Gradient combine(S a, const typename Jet<S, N>::Gradient& x, S b,
+                                            const typename Jet<S, N>::Gradient& y) {
+  typename Jet<S, N>::Gradient r;
+  for (int i = 0; i < N; ++i) r[i] = a * x[i] + b * y[i];
+  return r;
+}
+template <typename S, int N>
+inline typename Jet<S, N>::Gradient scaled(S a, const typename Jet<S, N>::Gradient& x) {
+  typename Jet<S, N>::Gradient r;
+  for (int i = 0; i < N; ++i) r[i] = a * x[i];
+  return r;
+}
+
 // Chain rule for y = f(x) given f(v), f'(v), f''(v).
 template <typename S, int N>
 inline Jet<S, N> chain(const Jet<S, N>& x, S f, S df, S ddf) {
-  return {f, df * x.d, df * x.t1, ddf * x.t1 * x.t1 + df * x.t2};
+  return {f, scaled<S, N>(df, x.d), df * x.t1, ddf * x.t1 * x.t1 + df * x.t2};
 }
 
 template <typename S, int N>
 inline Jet<S, N> operator+(const Jet<S, N>& a) { return a; }
 template <typename S, int N>
-inline Jet<S, N> operator-(const Jet<S, N>& a) { return {-a.v, -a.d, -a.t1, -a.t2}; }
+inline Jet<S, N> operator-(const Jet<S, N>& a) { return {-a.v, scaled<S, N>(S(-1), a.d), -a.t1, -a.t2}; }
 template <typename S, int N>
 inline Jet<S, N> operator+(const Jet<S, N>& a, const Jet<S, N>& b) {
-  return {a.v + b.v, a.d + b.d, a.t1 + b.t1, a.t2 + b.t2};
+  return {a.v + b.v, combine<S, N>(S(1), a.d, S(1), b.d), a.t1 + b.t1, a.t2 + b.t2};
 }
 template <typename S, int N>
 inline Jet<S, N> operator-(const Jet<S, N>& a, const Jet<S, N>& b) {
-  return {a.v - b.v, a.d - b.d, a.t1 - b.t1, a.t2 - b.t2};
+  return {a.v - b.v, combine<S, N>(S(1), a.d, S(-1), b.d), a.t1 - b.t1, a.t2 - b.t2};
 }
 template <typename S, int N>
 inline Jet<S, N> operator*(const Jet<S, N>& a, const Jet<S, N>& b) {
-  return {a.v * b.v, a.v * b.d + b.v * a.d, a.v * b.t1 + a.t1 * b.v,
+  return {a.v * b.v, combine<S, N>(a.v, b.d, b.v, a.d), a.v * b.t1 + a.t1 * b.v,
           a.v * b.t2 + S(2) * a.t1 * b.t1 + a.t2 * b.v};
 }
 template <typename S, int N>
@@ -78,7 +94,7 @@ inline Jet<S, N> operator/(const Jet<S, N>& a, const Jet<S, N>& b) {
   const S inv = S(1) / b.v;
   const S c = a.v * inv;
   const S c1 = (a.t1 - c * b.t1) * inv;
-  return {c, (a.d - c * b.d) * inv, c1, (a.t2 - S(2) * c1 * b.t1 - c * b.t2) * inv};
+  return {c, combine<S, N>(inv, a.d, -c * inv, b.d), c1, (a.t2 - S(2) * c1 * b.t1 - c * b.t2) * inv};
 }
 
 // Mixed with plain scalars (parameters such as a length).
@@ -89,9 +105,9 @@ inline Jet<S, N> operator+(S a, const Jet<S, N>& b) { return b + a; }
 template <typename S, int N>
 inline Jet<S, N> operator-(const Jet<S, N>& a, S b) { return {a.v - b, a.d, a.t1, a.t2}; }
 template <typename S, int N>
-inline Jet<S, N> operator-(S a, const Jet<S, N>& b) { return {a - b.v, -b.d, -b.t1, -b.t2}; }
+inline Jet<S, N> operator-(S a, const Jet<S, N>& b) { return {a - b.v, scaled<S, N>(S(-1), b.d), -b.t1, -b.t2}; }
 template <typename S, int N>
-inline Jet<S, N> operator*(const Jet<S, N>& a, S b) { return {a.v * b, a.d * b, a.t1 * b, a.t2 * b}; }
+inline Jet<S, N> operator*(const Jet<S, N>& a, S b) { return {a.v * b, scaled<S, N>(b, a.d), a.t1 * b, a.t2 * b}; }
 template <typename S, int N>
 inline Jet<S, N> operator*(S a, const Jet<S, N>& b) { return b * a; }
 template <typename S, int N>
@@ -193,7 +209,7 @@ inline Jet<S, N> atan2(const Jet<S, N>& y, const Jet<S, N>& x) {
   const S r2 = x.v * x.v + y.v * y.v, inv = S(1) / r2, inv2 = inv * inv;
   const S hy = x.v * inv, hx = -y.v * inv;
   const S hxx = S(2) * x.v * y.v * inv2, hyy = -hxx, hxy = (y.v * y.v - x.v * x.v) * inv2;
-  return {std::atan2(y.v, x.v), hx * x.d + hy * y.d, hx * x.t1 + hy * y.t1,
+  return {std::atan2(y.v, x.v), combine<S, N>(hx, x.d, hy, y.d), hx * x.t1 + hy * y.t1,
           hx * x.t2 + hy * y.t2 + hxx * x.t1 * x.t1 + S(2) * hxy * x.t1 * y.t1 + hyy * y.t1 * y.t1};
 }
 

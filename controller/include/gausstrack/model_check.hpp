@@ -13,7 +13,6 @@
 // must be finite.
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
@@ -22,6 +21,7 @@
 #include <string>
 
 #include "gausstrack/model.hpp"
+#include "gausstrack/small_dense.hpp"
 
 namespace gausstrack {
 
@@ -95,7 +95,9 @@ ModelCheckReport check_model(const M& m, const Eigen::Matrix<typename M::Scalar,
   const S a_max = at.mass_matrix.cwiseAbs().maxCoeff();
   r.asymmetry = a_max > S(0) ? double((at.mass_matrix - at.mass_matrix.transpose()).cwiseAbs().maxCoeff() / a_max)
                              : 0.0;
-  r.mass_matrix_positive_definite = Eigen::LLT<Eigen::Matrix<S, N, N>>(at.mass_matrix).info() == Eigen::Success;
+  Eigen::Matrix<S, N, N> factor = at.mass_matrix;
+  r.mass_matrix_positive_definite =
+      small_dense::cholesky_in_place(factor) && small_dense::all_finite(factor.data(), N * N);
   const double symmetric_tol = 100 * double(std::numeric_limits<S>::epsilon());
   if (r.asymmetry > symmetric_tol) {
     ++r.failures;

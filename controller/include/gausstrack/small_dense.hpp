@@ -14,6 +14,43 @@
 
 namespace gausstrack::small_dense {
 
+// Element-wise helpers over contiguous storage (a matrix with one row or one column is contiguous
+// whatever Eigen's storage order): the solver's whole-matrix checks and products without an Eigen
+// expression per use.
+
+template <typename Scalar>
+bool all_finite(const Scalar* x, int count) noexcept {
+  for (int i = 0; i < count; ++i)
+    if (!std::isfinite(x[i])) return false;
+  return true;
+}
+
+/// a == b entry by entry (so 0 == -0, and NaN equals nothing).
+template <typename Scalar>
+bool all_equal(const Scalar* a, const Scalar* b, int count) noexcept {
+  for (int i = 0; i < count; ++i)
+    if (!(a[i] == b[i])) return false;
+  return true;
+}
+
+template <typename Scalar>
+Scalar squared_norm(const Scalar* x, int count) noexcept {
+  Scalar sum(0);
+  for (int i = 0; i < count; ++i) sum += x[i] * x[i];
+  return sum;
+}
+
+/// y = M x for the rows x cols column-major M (y must not alias x).
+template <typename Scalar>
+void multiply(const Scalar* m, int rows, int cols, const Scalar* x, Scalar* y) noexcept {
+  for (int i = 0; i < rows; ++i) y[i] = Scalar(0);
+  for (int j = 0; j < cols; ++j) {
+    const Scalar xj = x[j];
+    const Scalar* mj = m + j * rows;
+    for (int i = 0; i < rows; ++i) y[i] += mj[i] * xj;
+  }
+}
+
 /// In place, the lower triangle of the symmetric positive definite `m` (its upper triangle is not
 /// read) becomes L with m = L L^T. Right-looking: step k scales column k and updates the columns
 /// to its right. Returns false, as Eigen's LLT does, when a pivot is <= 0 (not positive definite);

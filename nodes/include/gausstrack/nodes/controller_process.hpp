@@ -1,6 +1,7 @@
 // A whole controller process for model type M: options, configuration, LCM, the node, the loop
 // and its statistics. gausstrack-controller calls it for the compiled-in model a configuration
-// names; a user's own controller main may call it for their model in one line:
+// names; a user's own controller main may call it for their model in one line (linking
+// gausstrack::nodes: the law, its configuration and the LCM types, nothing of the simulator):
 //
 //   int main(int argc, char** argv) { return gausstrack::nodes::controller_main<MyModel>(argc, argv, "my_model"); }
 //
@@ -20,8 +21,8 @@
 #include "gausstrack/nodes/controller_node.hpp"
 #include "gausstrack/nodes/message_log.hpp"
 #include "gausstrack/nodes/process.hpp"
-#include "gausstrack/plant_sim/models.hpp"
-#include "gausstrack/plant_sim/scene.hpp"
+#include "gausstrack/tracking/config.hpp"
+#include "gausstrack/tracking/make_controller.hpp"
 
 namespace gausstrack::nodes {
 
@@ -57,7 +58,7 @@ inline int parse_controller_options(int argc, char** argv, ControllerProcessOpti
 /// Runs the controller for model type M until SIGINT/SIGTERM; returns the exit code. Prints
 /// "gausstrack-controller: ready" once subscribed.
 template <Model M>
-int run_controller(const ControllerProcessOptions& o, const plant_sim::TrackingSpec& spec, M defaults = {}) {
+int run_controller(const ControllerProcessOptions& o, const tracking::TrackingSpec& spec, M defaults = {}) {
   const ProcessOptions& p = o.process;
   // The log's writer before the real-time options, LCM (and its receive thread) after them.
   const auto log = open_message_log(p.log_path);
@@ -68,7 +69,7 @@ int run_controller(const ControllerProcessOptions& o, const plant_sim::TrackingS
   Outbox commands(lcm, p.command_channel, log.get(), p.log_wait);
   Outbox diagnostics(lcm, p.diagnostics_channel, o.diagnostics ? log.get() : nullptr, p.log_wait);
   Outbox stats_outbox(lcm, p.stats_channel, log.get(), true);
-  ControllerNode<M> node(plant_sim::make_controller<M>(spec, defaults), commands, o.diagnostics ? &diagnostics : nullptr);
+  ControllerNode<M> node(tracking::make_controller<M>(spec, defaults), commands, o.diagnostics ? &diagnostics : nullptr);
   lcm.subscribe(p.state_channel, &ControllerNode<M>::on_state, &node);
   std::printf("gausstrack-controller: ready (%s, %d coordinates, %d constraint rows)\n", spec.model.c_str(), M::kDof,
               M::kConstraints);
@@ -110,9 +111,9 @@ int controller_main(int argc, char** argv, const std::string& name, M defaults =
   ControllerProcessOptions o;
   if (const int code = parse_controller_options(argc, argv, o)) return code;
   try {
-    const plant_sim::TrackingSpec spec = plant_sim::load_tracking(o.process.scene_path, o.process.sets);
+    const tracking::TrackingSpec spec = tracking::load_tracking(o.process.scene_path, o.process.sets);
     if (spec.model != name)
-      throw plant_sim::SceneError(spec.where + ": this controller runs model '" + name + "', not '" + spec.model + "'");
+      throw tracking::ConfigError(spec.where + ": this controller runs model '" + name + "', not '" + spec.model + "'");
     return run_controller<M>(o, spec, defaults);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

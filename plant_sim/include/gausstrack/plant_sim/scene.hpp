@@ -10,13 +10,18 @@
 #include <utility>
 #include <vector>
 
+#include "gausstrack/tracking/config.hpp"
+
 namespace gausstrack::plant_sim {
 
-/// A scene file that cannot be used. what() names the file, the line and the dotted key.
-class SceneError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+/// A scene file that cannot be used: the configuration error of gausstrack::tracking (what()
+/// names the file, the line and the dotted key).
+using SceneError = tracking::ConfigError;
+/// The tracking section and its parameters are the law's configuration (gausstrack::tracking).
+using tracking::ModelParameter;
+using tracking::TrackingSpec;
+using tracking::load_tracking;
+using tracking::parse_tracking;
 
 inline constexpr int kGround = -1;  ///< coordinate index meaning "attached to ground"
 inline constexpr int kMaxCoordinates = 32;  ///< the messages' MAX_DIMENSION
@@ -55,36 +60,6 @@ struct ConstraintSpec {
   std::vector<int> coordinates;  ///< (x, y) or (x, y, z)
   double length = 0.0;
   double mu = 0.0;
-};
-
-/// One named model parameter from a scene, with where it was written (for error messages).
-struct ModelParameter {
-  std::string name;
-  double value = 0;
-  std::string where;  ///< "file:line: dotted.key"
-};
-
-/// The tracking task: the controller's own model of the plant (which may differ from the plant
-/// on purpose), its parameters (the trajectory's included) and how the law is computed. A
-/// controller process reads only this section.
-struct TrackingSpec {
-  bool enabled = false;
-  std::string model;                     ///< a compiled-in model's name, or a user's
-  std::string where;                     ///< where `model` was written
-  std::vector<ModelParameter> parameters;  ///< tracking.parameters, then tracking.trajectory
-  double zeta = 1, stabilization_omega = 0;
-  std::string strategy = "cholesky";
-  /// Actuator limit on every coordinate [N]: no command exceeds it (saturation is reported).
-  double force_limit = std::numeric_limits<double>::infinity();
-  /// SolverOptions::min_singular_value: the physical-scale near-singularity floor (0: off).
-  double min_singular_value = 0;
-
-  /// The value of a parameter the scene sets, or `fallback`.
-  double parameter(const std::string& name, double fallback) const {
-    for (const ModelParameter& p : parameters)
-      if (p.name == name) return p.value;
-    return fallback;
-  }
 };
 
 /// A plant stepped by a physics engine instead of plant_sim's own integrator (plant.engine).
@@ -152,11 +127,5 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 /// The same from YAML text; `name` stands for the file in messages.
 Scene parse_scene(const std::string& yaml_text, const std::string& name,
                   const std::vector<std::string>& overrides = {});
-
-/// A controller's own configuration: the `tracking` section of a file (a whole scene, or a file
-/// holding only that section); nothing else in the file is read. Throws SceneError.
-TrackingSpec load_tracking(const std::string& path, const std::vector<std::string>& overrides = {});
-TrackingSpec parse_tracking(const std::string& yaml_text, const std::string& name,
-                            const std::vector<std::string>& overrides = {});
 
 }  // namespace gausstrack::plant_sim

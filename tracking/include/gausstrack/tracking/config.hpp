@@ -1,0 +1,72 @@
+// The law's configuration: the `tracking` section of a YAML file (a whole scene, or a file holding
+// that section alone) says which model the controller runs, with which parameters, how its
+// constraints are stabilized and how eq. (32) is computed. What a controller process needs and
+// nothing of the plant: this component depends on the law and yaml-cpp alone.
+#pragma once
+
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "gausstrack/constraint_solver.hpp"
+
+namespace gausstrack::tracking {
+
+/// A configuration (or scene) that cannot be used. what() names the file, the line and the
+/// dotted key, or the --set override.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// One named model parameter, with where it was written (for error messages).
+struct ModelParameter {
+  std::string name;
+  double value = 0;
+  std::string where;  ///< "file:line: dotted.key"
+};
+
+/// The tracking task: the controller's own model of the plant (which may differ from the plant
+/// on purpose), its parameters (the trajectory's included) and how the law is computed.
+struct TrackingSpec {
+  bool enabled = false;
+  std::string model;                       ///< a compiled-in model's name, or a user's
+  std::string where;                       ///< where `model` was written
+  std::vector<ModelParameter> parameters;  ///< tracking.parameters, then tracking.trajectory
+  double zeta = 1, stabilization_omega = 0;
+  InverseStrategy strategy = InverseStrategy::kCholeskyWithFallback;
+  /// Actuator limit on every coordinate [N]: no command exceeds it (saturation is reported).
+  double force_limit = std::numeric_limits<double>::infinity();
+  /// SolverOptions::min_singular_value: the physical-scale near-singularity floor (0: off).
+  double min_singular_value = 0;
+
+  /// The value of a parameter the configuration sets, or `fallback`.
+  double parameter(const std::string& name, double fallback) const {
+    for (const ModelParameter& p : parameters)
+      if (p.name == name) return p.value;
+    return fallback;
+  }
+};
+
+/// Every strategy, in the order the names are listed in messages.
+inline constexpr InverseStrategy kStrategies[] = {
+    InverseStrategy::kCholeskyWithFallback, InverseStrategy::kSvd,
+    InverseStrategy::kCompleteOrthogonal, InverseStrategy::kDampedLeastSquares};
+
+/// The strategy whose name (to_string, the one name table) is `name`; nothing for another name.
+std::optional<InverseStrategy> strategy_from_name(std::string_view name);
+/// "cholesky, svd, cod, damped", for messages.
+std::string strategy_names();
+
+/// Reads the `tracking` section of the file at `path` (nothing else in it is read). `overrides`
+/// are "dotted.key=value" pairs applied first (values parsed as YAML). Throws ConfigError naming
+/// file, line and key.
+TrackingSpec load_tracking(const std::string& path, const std::vector<std::string>& overrides = {});
+/// The same from YAML text; `name` stands for the file in messages.
+TrackingSpec parse_tracking(const std::string& yaml_text, const std::string& name,
+                            const std::vector<std::string>& overrides = {});
+
+}  // namespace gausstrack::tracking

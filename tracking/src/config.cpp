@@ -1,0 +1,99 @@
+#include "gausstrack/tracking/config.hpp"
+
+#include <algorithm>
+
+#include "gausstrack/tracking/builtin_models.hpp"
+#include "gausstrack/tracking/make_controller.hpp"
+#include "gausstrack/tracking/yaml_reader.hpp"
+
+namespace gausstrack::tracking {
+
+std::optional<InverseStrategy> strategy_from_name(std::string_view name) {
+  for (InverseStrategy s : kStrategies)
+    if (name == to_string(s)) return s;
+  return std::nullopt;
+}
+
+std::string strategy_names() {
+  std::string names;
+  for (InverseStrategy s : kStrategies)
+    names += (names.empty() ? "" : ", ") + std::string(to_string(s));
+  return names;
+}
+
+std::string builtin_model_names() {
+  std::string names;
+  for (const char* name : kBuiltinModels) names += (names.empty() ? "" : ", ") + std::string(name);
+  return names;
+}
+
+bool builtin_parameter_names(std::string_view model, std::vector<std::string>& names) {
+  return visit_builtin_model(
+      model, [&]<typename M>(std::type_identity<M>) { names = parameter_names<M>(); });
+}
+
+void check_parameter_names(const Reader& parent, const char* key, const std::string& model,
+                           const std::vector<std::string>& names) {
+  if (!parent.has(key)) return;
+  const Reader r = parent.child(key);
+  r.require_map();
+  for (const auto& kv : r.node()) {
+    const std::string k = r.key(kv.first);
+    if (std::find(names.begin(), names.end(), k) == names.end()) {
+      std::string known;
+      for (const auto& p : names) known += (known.empty() ? "" : ", ") + p;
+      r.fail_at(kv.first, r.key_path(k),
+                "model '" + model + "' has no parameter '" + k + "' (known: " + known + ")");
+    }
+  }
+}
+
+TrackingSpec read_tracking(const Reader& t) {
+  t.allow_only({"model", "parameters", "trajectory", "stabilization", "strategy", "force_limit",
+                "min_singular_value"});
+  TrackingSpec tr;
+  tr.enabled = true;
+  tr.model = t.text("model");
+  tr.where = t.child("model").where();
+  // The trajectory's parameters are the model's too; they are kept apart in scenes for reading.
+  for (const char* section : {"parameters", "trajectory"})
+    if (t.has(section)) {
+      const auto p = read_parameters(t.child(section));
+      tr.parameters.insert(tr.parameters.end(), p.begin(), p.end());
+    }
+  if (std::vector<std::string> names; builtin_parameter_names(tr.model, names)) {
+    check_parameter_names(t, "parameters", tr.model, names);
+    check_parameter_names(t, "trajectory", tr.model, names);
+  } else if (tr.model.empty()) {
+    t.child("model").fail("must name a model");
+  }
+  if (t.has("stabilization")) {
+    const Reader st = t.child("stabilization");
+    st.allow_only({"zeta", "omega"});
+    tr.zeta = st.non_negative("zeta", 1.0);
+    tr.stabilization_omega = st.non_negative("omega", 0.0);
+  }
+  tr.force_limit = t.positive("force_limit", tr.force_limit);
+  tr.min_singular_value = t.non_negative("min_singular_value", tr.min_singular_value);
+  if (t.has("strategy")) {
+    const std::string name = t.text("strategy");
+    const auto strategy = strategy_from_name(name);
+    if (!strategy)
+      t.child("strategy").fail("unknown strategy '" + name + "' (known: " + strategy_names() + ")");
+    tr.strategy = *strategy;
+  }
+  return tr;
+}
+
+TrackingSpec parse_tracking(const std::string& yaml_text, const std::string& name,
+                            const std::vector<std::string>& overrides) {
+  return reading(name, [&] {
+    return read_tracking(parse_root(yaml_text, name, overrides).child("tracking"));
+  });
+}
+
+TrackingSpec load_tracking(const std::string& path, const std::vector<std::string>& overrides) {
+  return parse_tracking(read_file(path, "configuration file"), path, overrides);
+}
+
+}  // namespace gausstrack::tracking
