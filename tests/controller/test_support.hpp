@@ -82,17 +82,6 @@ double inf_norm(const Eigen::MatrixBase<D>& m) {
 template <typename Scalar>
 using DynamicMatrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
 
-/// Moore-Penrose inverse by Eigen's SVD: singular values <= tol * sigma_max count as zero.
-template <typename Scalar>
-DynamicMatrix<Scalar> dynamic_pseudo_inverse(const DynamicMatrix<Scalar>& m, Scalar tol) {
-  const Eigen::JacobiSVD<DynamicMatrix<Scalar>> svd(m, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const auto& sigma = svd.singularValues();
-  DynamicMatrix<Scalar> inverse = DynamicMatrix<Scalar>::Zero(m.cols(), m.rows());
-  for (Eigen::Index i = 0; i < sigma.size(); ++i)
-    if (sigma(i) > tol * sigma(0)) inverse += svd.matrixV().col(i) * svd.matrixU().col(i).transpose() / sigma(i);
-  return inverse;
-}
-
 /// One random constrained system of fixed sizes.
 template <int N, int P, typename Scalar = double>
 struct RandomSystem {
@@ -168,7 +157,7 @@ Eigen::Matrix<Scalar, N, 1> compact_form_force(const RandomSystem<N, P, Scalar>&
   const Eigen::SelfAdjointEigenSolver<M> eig(A);
   const M a = A.llt().solve(M(s.Q - s.f));
   const M b = D * eig.operatorInverseSqrt();
-  return Eigen::Matrix<Scalar, N, 1>(eig.operatorSqrt() * dynamic_pseudo_inverse<Scalar>(b, tol) * (M(s.g) - D * a));
+  return Eigen::Matrix<Scalar, N, 1>(eig.operatorSqrt() * reference::pseudo_inverse(b, tol) * (M(s.g) - D * a));
 }
 
 /// Lagrange multipliers: [A -D^T; D 0] [q''; mu] = [Q - f; g], Q' = D^T mu (full row rank D).
@@ -198,7 +187,7 @@ template <int N, int P, typename Scalar>
 Eigen::Matrix<Scalar, N, 1> null_space_vector(const Eigen::Matrix<Scalar, P, N>& D,
                                               RandomSource<Scalar>& rng) {
   const Eigen::Matrix<Scalar, N, 1> w = rng.template matrix<N, 1>();
-  const DynamicMatrix<Scalar> pinv = dynamic_pseudo_inverse<Scalar>(D, Scalar(1e-12));
+  const DynamicMatrix<Scalar> pinv = reference::pseudo_inverse(DynamicMatrix<Scalar>(D), Scalar(1e-12));
   return w - Eigen::Matrix<Scalar, N, 1>(pinv * (D * w));
 }
 

@@ -11,27 +11,28 @@
 namespace gausstrack::reference {
 
 /// Moore-Penrose inverse of m: singular values <= relative_tolerance * sigma_max count as zero.
+/// Fixed or dynamic sizes (a dynamic size gives a dynamic-size answer).
 template <typename Derived>
 Eigen::Matrix<typename Derived::Scalar, Derived::ColsAtCompileTime, Derived::RowsAtCompileTime>
 pseudo_inverse(const Eigen::MatrixBase<Derived>& m, typename Derived::Scalar relative_tolerance) {
   using Scalar = typename Derived::Scalar;
   constexpr int R = Derived::RowsAtCompileTime, C = Derived::ColsAtCompileTime;
-  constexpr int S = R > C ? R : C;
-  // m padded with zero rows or columns to a square S x S matrix has m's singular values (and
+  constexpr int S = (R == Eigen::Dynamic || C == Eigen::Dynamic) ? Eigen::Dynamic : (R > C ? R : C);
+  using Square = Eigen::Matrix<Scalar, S, S>;
+  const Eigen::Index r = m.rows(), c = m.cols(), s = r > c ? r : c;
+  // m padded with zero rows or columns to a square s x s matrix has m's singular values (and
   // zeros); its pseudo-inverse holds m^+ in the matching block.
-  Eigen::Matrix<Scalar, S, S> square = Eigen::Matrix<Scalar, S, S>::Zero();
-  square.template topLeftCorner<R, C>() = m;
-  Eigen::JacobiSVD<Eigen::Matrix<Scalar, S, S>, Eigen::NoQRPreconditioner> svd(
-      square, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const auto& s = svd.singularValues();
-  Eigen::Matrix<Scalar, S, S> inv = Eigen::Matrix<Scalar, S, S>::Zero();
-  if (s(0) > Scalar(0)) {
-    for (int i = 0; i < S; ++i) {
-      if (s(i) > relative_tolerance * s(0))
-        inv += svd.matrixV().col(i) * svd.matrixU().col(i).transpose() / s(i);
+  Square square = Square::Zero(s, s);
+  square.topLeftCorner(r, c) = m;
+  Eigen::JacobiSVD<Square, Eigen::NoQRPreconditioner> svd(square, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const auto& sv = svd.singularValues();
+  Square inv = Square::Zero(s, s);
+  if (sv(0) > Scalar(0)) {
+    for (Eigen::Index i = 0; i < s; ++i) {
+      if (sv(i) > relative_tolerance * sv(0)) inv += svd.matrixV().col(i) * svd.matrixU().col(i).transpose() / sv(i);
     }
   }
-  return inv.template topLeftCorner<C, R>();
+  return inv.topLeftCorner(c, r);
 }
 
 template <int N, typename Scalar>
@@ -42,7 +43,8 @@ struct LiteralSolution {
   Eigen::Matrix<Scalar, N, 1> force_from_rhs;        // A (I - X) D^- g
 };
 
-/// Eqs. (22), (23), (30a), (32) with D^- = D^+ and H^-_ls = H^+.
+/// Eqs. (22), (23), (30a), (32) with D^- = D^+ and H^-_ls = H^+. N and P may be Eigen::Dynamic
+/// (the tests use dynamic sizes: one instantiation serves every size).
 template <int N, int P, typename Scalar>
 LiteralSolution<N, Scalar> literal_formulas(const Eigen::Matrix<Scalar, N, N>& A,
                                             const Eigen::Matrix<Scalar, N, 1>& f,
@@ -51,7 +53,7 @@ LiteralSolution<N, Scalar> literal_formulas(const Eigen::Matrix<Scalar, N, N>& A
                                             const Eigen::Matrix<Scalar, P, 1>& g,
                                             Scalar relative_tolerance = Scalar(1e-10)) {
   using MatrixNN = Eigen::Matrix<Scalar, N, N>;
-  const MatrixNN I = MatrixNN::Identity();
+  const MatrixNN I = MatrixNN::Identity(A.rows(), A.cols());
   Eigen::SelfAdjointEigenSolver<MatrixNN> eig(A);
   const MatrixNN a_half = eig.operatorSqrt();              // A^(1/2)
   const MatrixNN a_minus_half = eig.operatorInverseSqrt(); // A^(-1/2)
