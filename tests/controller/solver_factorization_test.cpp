@@ -313,6 +313,25 @@ TEST(HardCases, OverflowingFactorsAreANonFiniteResultNotStaleState) {
   }
 }
 
+// Entries at the top of the range (1e308, above 2^1023): B is finite, its Gram matrix is not. The
+// rank-revealing kernels scale by a power of two that must itself be finite. Expectation, for the
+// SVD, the COD and the damped strategy (lambda = 1, which reaches its SVD filter through the
+// overflowed Gram matrix): answered, q'' = (g1, g2, 0) / 1e308 (A = I, f = Q = 0), rank 2.
+TEST(HardCases, EntriesAtTheTopOfTheRangeAreDecomposed) {
+  Eigen::Matrix<double, 2, 3> D = Eigen::Matrix<double, 2, 3>::Zero();
+  D(0, 0) = D(1, 1) = 1e308;
+  const Eigen::Vector2d g(1e10, 2e10);
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero(), expected(1e-298, 2e-298, 0);
+  for (InverseStrategy s :
+       {InverseStrategy::kSvd, InverseStrategy::kCompleteOrthogonal, InverseStrategy::kDampedLeastSquares}) {
+    auto solver = solver_for<3, 2>(s, -1, s == InverseStrategy::kDampedLeastSquares ? 1.0 : 0.0);
+    ConstraintSolution<3, 2> sol;
+    ASSERT_EQ(solver.solve(Eigen::Matrix3d::Identity(), zero, zero, D, g, sol), Status::kOk) << to_string(s);
+    EXPECT_TRUE(near(sol.acceleration, expected, 1e-12, 2e-298, to_string(s)));
+    EXPECT_EQ(sol.diagnostics.rank, 2) << to_string(s);
+  }
+}
+
 // Expectation: a solver told the mass matrix is diagonal gives the dense solver's answer (to
 // rounding) for a diagonal A, in every strategy; it reads the diagonal alone; a non-positive or
 // non-finite diagonal entry fails as it does for the dense solver.

@@ -116,8 +116,10 @@ struct SolverOptions {
 /// Diagnostics of one solve. Singular values are those of B = D L^-T, which equal those of
 /// D A^(-1/2): exact for kSvd; for the normal equations bounds from their Cholesky factor
 /// (sigma_max from above, sigma_min_kept from below, so the condition estimate is never low; with
-/// damping they bound sqrt(sigma^2 + lambda^2) instead); for kCompleteOrthogonal estimates from
-/// its triangular factor's diagonal.
+/// damping they bound sqrt(sigma^2 + lambda^2) instead); for kCompleteOrthogonal the largest and
+/// smallest kept pivots of its column-pivoted QR. A call that fell back to the SVD (kFellBackToSvd,
+/// the damped strategy's included) reports the SVD's exact singular values, its rank and, from
+/// them, kRankDeficient and kIllConditioned.
 template <typename Scalar>
 struct SolveDiagnostics {
   Status status = Status::kOk;
@@ -556,7 +558,7 @@ class ConstraintSolver {
             for (int j = 0; j < P; ++j) c += svd_v_(j, i) * r(j, k);
             // sigma / (sigma^2 + lambda^2): 1 / sigma without damping.
             const Scalar sigma = svd_sigma_(i);
-            c = svd_damping2_ > Scalar(0) ? c * sigma / (sigma * sigma + svd_damping2_) : c / sigma;
+            c = svd_damping2_ > Scalar(0) ? c / (sigma + svd_damping2_ / sigma) : c / sigma;  // no sigma^2
             for (int j = 0; j < N; ++j) y(j, k) += svd_u_(j, i) * c;
           }
         }

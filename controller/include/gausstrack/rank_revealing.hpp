@@ -3,22 +3,25 @@
 //
 // Why by hand: Eigen's fixed-size JacobiSVD and CompleteOrthogonalDecomposition unroll into a large
 // amount of code at every size they are instantiated with, and every model pays for them because
-// the strategy is chosen at run time. These kernels take run-time sizes (the solver passes its
-// compile-time N and P) and are templated on the scalar alone, so a program with many models
-// compiles them once per scalar type. Nothing allocates or throws; every loop is bounded.
+// the strategy is chosen at run time. The SVD takes run-time sizes and is templated on the scalar
+// alone (compiled once per scalar type, whatever the models); the complete orthogonal
+// decomposition keeps fixed-size storage, plain loops of a few kilobytes of code per size.
+// Nothing allocates or throws; every loop is bounded.
 //
 // Scaling. Each kernel first divides its matrix by a power of two near its largest entry (exact),
-// so that no square of an entry or norm overflows or underflows for any finite input; singular
-// values and triangular factors are scaled back at the end.
+// so that no square of an entry or norm overflows for any finite input; singular values and
+// triangular factors are scaled back at the end. (Entries far below the largest may still
+// underflow when squared: they are below the kernels' accuracy of about eps times the largest.)
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace gausstrack::small_dense {
 
-/// A power of two s with max_i |x_i| / s in [0.5, 1) (1 for a zero x): division by s is exact
+/// A power of two s with max_i |x_i| / s in [1, 2) (1 for a zero x): division by s is exact
 /// unless an entry falls below the normal range.
 template <typename Scalar>
 Scalar power_of_two_scale(const Scalar* x, int count) noexcept {
@@ -27,7 +30,7 @@ Scalar power_of_two_scale(const Scalar* x, int count) noexcept {
   if (!(largest > Scalar(0)) || !std::isfinite(largest)) return Scalar(1);
   int exponent = 0;
   (void)std::frexp(largest, &exponent);
-  return std::ldexp(Scalar(1), exponent);
+  return std::ldexp(Scalar(1), exponent - 1);  // max / s in [1, 2): s is representable even at the top
 }
 
 /// ||x||_2 of `count` entries without overflow or underflow of the squares: max |x_i| times the
@@ -50,7 +53,7 @@ Scalar scaled_norm(const Scalar* x, int count) noexcept {
 inline constexpr int kMaxJacobiSweeps = 64;
 
 /// Thin SVD of the rows x cols column-major matrix w (rows >= cols) by one-sided Jacobi rotations
-/// (Hestenes; de Rijk's rotation), in place: w V = U S with the columns of w made orthogonal.
+/// (Hestenes' method with Rutishauser's rotation), in place: w V = U S with the columns of w made orthogonal.
 /// On return w holds U (rows x cols, unit columns; a column whose singular value is 0 is zero),
 /// sigma the singular values in descending order and v (cols x cols, column-major) the orthogonal
 /// V, so that the input equals U diag(sigma) V^T. Singular values are accurate to about
@@ -81,6 +84,11 @@ bool jacobi_svd_in_place(Scalar* w, int rows, int cols, Scalar* sigma, Scalar* v
           beta += wj[k] * wj[k];
           gamma += wi[k] * wj[k];
         }
+        // A column negligible against the other (its norm below eps times the other's: within
+        // the accuracy above) is left alone; without this, a column whose squares underflow would
+        // make the threshold 0 and keep rounding-level gamma rotating until the sweep cap.
+        const Scalar eps = std::numeric_limits<Scalar>::epsilon();
+        if (!(std::min(alpha, beta) > eps * eps * std::max(alpha, beta))) continue;
         if (!(std::abs(gamma) > tolerance * std::sqrt(alpha) * std::sqrt(beta))) continue;
         rotated = true;
         // The rotation by angle theta with tan(theta) = t, the smaller root of
@@ -166,9 +174,9 @@ void apply_householder(const Scalar* tail, Scalar tau, Scalar* y, int n) noexcep
 ///   y = Pi Z [S^-T (Q^T c)_(1:r); 0].
 template <typename Scalar, int MaxRows, int MaxCols>
 struct CompleteOrthogonal {
-  Scalar qr[MaxRows * MaxCols];  // R above the diagonal, Q's reflectors below (rows x cols)
+  Scalar qr[MaxRows * MaxCols];  // R on and above the diagonal, Q's reflectors below (rows x cols)
   Scalar q_tau[MaxRows];
-  Scalar z[MaxCols * MaxRows];  // S above the diagonal, Z's reflectors below (cols x rank)
+  Scalar z[MaxCols * MaxRows];  // S on and above the diagonal, Z's reflectors below (cols x rank)
   Scalar z_tau[MaxRows];
   int permutation[MaxCols];  // column k of B Pi is column permutation[k] of B
   Scalar scale = Scalar(1);  // B was divided by it (a power of two)
@@ -215,9 +223,11 @@ bool factor_complete_orthogonal(const Scalar* b, int rows, int cols, Scalar rela
   f.largest_pivot = largest * f.scale;
   f.smallest_kept_pivot = Scalar(0);
   if (largest > Scalar(0)) {
+    // The kept pivots are the leading ones: counting stops at the first below the tolerance (the
+    // pivots decrease up to rounding), so S is built from exactly the kept rows.
     for (int k = 0; k < rows; ++k) {
       const Scalar pivot = std::abs(a[k * rows + k]);
-      if (!(pivot > relative_tolerance * largest)) continue;
+      if (!(pivot > relative_tolerance * largest)) break;
       ++f.rank;
       f.smallest_kept_pivot =
           f.smallest_kept_pivot == Scalar(0) ? pivot : std::min(f.smallest_kept_pivot, pivot);
