@@ -1,15 +1,20 @@
 #!/usr/bin/python3
 """Summarizes the benchmark outputs in DIR (written by scripts/bench) as DIR/README.md: the
 control law per system and strategy beside its baselines, the targets as ratios from one run,
-how cost grows with N (fitted exponent), the plant step, the firmware loop, transport and the
-closed loop.
+how cost grows with N (fitted exponent), the plant step, the firmware loop, transport, the
+closed loop against its floors, and the accuracy and MuJoCo studies.
 
-usage: report_bench.py DIR
+usage: report_bench.py DIR [--doc PAGE.md]
+  --doc  also replace the measured part of PAGE.md (between its "scripts/bench: begin" and
+         "scripts/bench: end" lines) with the same tables
 """
+import argparse
 import json
 import math
 import os
 import sys
+
+BEGIN, END = "<!-- scripts/bench: begin", "<!-- scripts/bench: end"
 
 STRATEGIES = ("cholesky", "cholesky_refactor", "cholesky_dense_refactor", "svd", "cod", "damped")
 BASELINES = ("literal_fixed", "dynamic_user", "dynamic_kkt", "plain_fixed", "model_terms", "closed_form")
@@ -49,7 +54,37 @@ def ns(v):
     return f"{v / 1e3:.2f} us" if v >= 1e4 else f"{v:.0f} ns"
 
 
-def main(d):
+def studies(d):
+    """The accuracy and MuJoCo studies' own tables (their headings one level down), if they ran."""
+    out = []
+    for path, title in ((os.path.join(d, "accuracy_vs_time", "README.md"), "What accuracy costs"),
+                        (os.path.join(d, "mujoco_study", "mujoco_study.md"), "MuJoCo as the plant")):
+        if os.path.exists(path):
+            with open(path) as f:
+                lines = f.read().rstrip("\n").split("\n")
+            if lines and lines[0].startswith("# "):
+                lines = lines[1:]
+            out += [f"## {title}", ""] + [("#" + l if l.startswith("#") else l) for l in lines] + [""]
+    return out
+
+
+def update_doc(page, body):
+    """Replaces the lines between the page's begin and end markers with body."""
+    with open(page) as f:
+        lines = f.read().split("\n")
+    begin = next((i for i, l in enumerate(lines) if l.startswith(BEGIN)), None)
+    end = next((i for i, l in enumerate(lines) if l.startswith(END)), None)
+    if begin is None or end is None or end < begin:
+        print(f"report_bench.py: {page} has no '{BEGIN} ...' and '{END} ...' lines", file=sys.stderr)
+        return 1
+    body = [("#" + l if l.startswith("## ") or l.startswith("### ") else l) for l in body]
+    with open(page, "w") as f:
+        f.write("\n".join(lines[:begin + 1] + body + lines[end:]))
+    print(page)
+    return 0
+
+
+def main(d, page=None):
     out = ["# Benchmarks", "", "Written by `scripts/bench`; every figure in a table comes from one run on the machine "
            "that ran it, baselines included.", ""]
     doc = load(d, "controller_bench.json")
@@ -236,14 +271,16 @@ def main(d):
             body = f.read().split("\n", 1)[1]
         out += ["## The closed loop against the machine's floors (same run)", body]
 
+    out += studies(d)
     with open(os.path.join(d, "README.md"), "w") as f:
         f.write("\n".join(out) + "\n")
     print(os.path.join(d, "README.md"))
-    return 0
+    return update_doc(page, out[2:]) if page else 0
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        print(__doc__, file=sys.stderr)
-        sys.exit(2)
-    sys.exit(main(sys.argv[1]))
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("dir")
+    parser.add_argument("--doc", metavar="PAGE.md")
+    args = parser.parse_args()
+    sys.exit(main(args.dir, args.doc))

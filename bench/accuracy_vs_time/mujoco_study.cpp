@@ -7,6 +7,8 @@
 //   mujoco_mismatch.csv the closed loop on a plant whose link 2 is 10% heavier (arm3_heavy.xml)
 //                     than the controller's model, with and without stabilization.
 // Writes mujoco_study.md, the two tables in Markdown. --quick: one timestep, 0.2 s (for CI).
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -38,12 +40,18 @@ std::string fmt(double v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 4) {
-    std::fprintf(stderr, "usage: %s SCENE_DIR MODEL_DIR OUT_DIR [--quick]\n", argv[0]);
-    return 2;
+  std::string scenes, models, out;
+  bool quick = false;
+  CLI::App app("MuJoCo as the plant: each integrator and timestep on the planar arm, free swing and closed loop.");
+  app.add_option("scene_dir", scenes, "the scenes (plant_sim/scenes)")->required()->check(CLI::ExistingDirectory);
+  app.add_option("model_dir", models, "the MJCF models (plant_sim/models)")->required()->check(CLI::ExistingDirectory);
+  app.add_option("out_dir", out, "where the CSVs and tables go")->required();
+  app.add_flag("--quick", quick, "one timestep, 0.2 s (for the tests)");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // --help, or a usage error (printed)
   }
-  const std::string scenes = argv[1], models = argv[2], out = argv[3];
-  const bool quick = argc > 4 && std::string(argv[4]) == "--quick";
   std::filesystem::create_directories(out);
   const std::string arm = scenes + "/planar_arm_mujoco.yaml";
   const std::string swing = quick ? "duration=0.2" : "duration=1.0";

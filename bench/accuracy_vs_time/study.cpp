@@ -19,6 +19,8 @@
 //                    without stabilization.
 //   stabilization.csv stabilization gains at 1 kHz, exact model and a plant whose k1 is 10% high.
 // --quick runs a token subset (for CI).
+#include <CLI/CLI.hpp>
+
 #ifdef GAUSSTRACK_HAVE_ARKODE
 #include <arkode/arkode_erkstep.h>
 #include <nvector/nvector_serial.h>
@@ -439,12 +441,17 @@ void projection(const fs::path& dir, std::ofstream& csv, bool quick) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 3 || argc > 4 || (argc == 4 && std::string(argv[3]) != "--quick")) {
-    std::fprintf(stderr, "usage: %s SCENE_DIR OUT_DIR [--quick]\n", argv[0]);
-    return 2;
+  fs::path scene_dir, out;
+  bool quick = false;
+  CLI::App app("What accuracy costs: integrators, strategies, control rates and stabilization gains on the scenes.");
+  app.add_option("scene_dir", scene_dir, "the scenes (plant_sim/scenes)")->required()->check(CLI::ExistingDirectory);
+  app.add_option("out_dir", out, "where the CSVs and tables go")->required();
+  app.add_flag("--quick", quick, "a short run of every part (for the tests)");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // --help, or a usage error (printed)
   }
-  const fs::path scene_dir = argv[1], out = argv[2];
-  const bool quick = argc == 4;
   try {
     fs::create_directories(out);
     std::vector<fs::path> scenes;

@@ -8,6 +8,8 @@
 // tracking error reached (so a loop that computes nonsense cannot look fast).
 #include <time.h>
 
+#include <CLI/CLI.hpp>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -16,7 +18,7 @@
 
 #include "allocation_counter.hpp"
 #include "duffing_closed_form.hpp"
-#include "gausstrack/nodes/latency_recorder.hpp"
+#include "gausstrack/nodes/latency_json.hpp"
 #include "gausstrack/systems/coupled_duffing.hpp"
 #include "gausstrack/tracking_controller.hpp"
 
@@ -104,13 +106,11 @@ void print(const char* name, const LoopResult& r) {
                               '#').c_str());
 }
 
-std::string json(const char* name, const LoopResult& r) {
-  char buf[512];
-  std::snprintf(buf, sizeof buf,
-                "\"%s\": {%s, %s, \"allocations\": %ld, \"max_tracking_error\": %.6g}", name,
-                r.latency_ns.json("latency_ns").c_str(), r.jitter_ns.json("jitter_ns").c_str(), r.allocations,
-                r.max_tracking_error);
-  return buf;
+nlohmann::ordered_json json(const LoopResult& r) {
+  return {{"latency_ns", gausstrack::nodes::percentiles_json(r.latency_ns)},
+          {"jitter_ns", gausstrack::nodes::percentiles_json(r.jitter_ns)},
+          {"allocations", r.allocations},
+          {"max_tracking_error", r.max_tracking_error}};
 }
 
 }  // namespace
@@ -119,14 +119,15 @@ int main(int argc, char** argv) {
   long iterations = 1000000;
   double period_us = 10;
   std::string out;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--iterations" && i + 1 < argc) iterations = std::atol(argv[++i]);
-    else if (a == "--period-us" && i + 1 < argc) period_us = std::atof(argv[++i]);
-    else if (a == "--out" && i + 1 < argc) out = argv[++i];
-    else return std::fprintf(stderr, "usage: %s [--iterations N] [--period-us P] [--out FILE.json]\n", argv[0]), 2;
+  CLI::App app("The Duffing law (eq. 35) against its closed form in a paced loop, as firmware would run it.");
+  app.add_option("--iterations", iterations, "loop iterations")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--period-us", period_us, "loop period [us]")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--out", out, "write the percentiles as JSON to this file");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // --help, or a usage error (printed)
   }
-  if (iterations <= 0 || !(period_us > 0)) return std::fprintf(stderr, "error: iterations and period must be positive\n"), 2;
   const auto period_ns = static_cast<std::int64_t>(std::llround(period_us * 1e3));
   const auto n = static_cast<std::size_t>(iterations);
 
@@ -150,9 +151,12 @@ int main(int argc, char** argv) {
   std::printf("ratio of medians (gausstrack / closed form): %.2f\n",
               library.latency_ns.quantile(0.5) / closed.latency_ns.quantile(0.5));
   if (!out.empty()) {
+    const nlohmann::ordered_json j = {{"iterations", iterations},
+                                      {"period_us", period_us},
+                                      {"closed_form", json(closed)},
+                                      {"gausstrack", json(library)}};
     std::ofstream f(out);
-    f << "{\"iterations\": " << iterations << ", \"period_us\": " << period_us << ", " << json("closed_form", closed)
-      << ", " << json("gausstrack", library) << "}\n";
+    f << j.dump(2) << '\n';
     if (!f) return std::fprintf(stderr, "error: cannot write %s\n", out.c_str()), 1;
   }
   return library.allocations == 0 ? 0 : 1;

@@ -16,6 +16,7 @@
 // Prints p50/p99/p99.9/max of each and writes them as JSON.
 #include <arpa/inet.h>
 #include <lcm/lcm-cpp.hpp>
+#include <CLI/CLI.hpp>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -34,7 +35,7 @@
 #include <vector>
 
 #include "gausstrack/control_command_t.hpp"
-#include "gausstrack/nodes/latency_recorder.hpp"
+#include "gausstrack/nodes/latency_json.hpp"
 #include "gausstrack/nodes/plant_node.hpp"
 #include "gausstrack/plant_state_t.hpp"
 
@@ -210,15 +211,15 @@ void print(const char* name, const LatencyRecorder& r, const char* what = "round
               r.quantile(0.99), r.quantile(0.999), r.max(), r.count(), what);
 }
 
-// The paced path's wake-ups: lateness and misses, printed and as JSON members.
-std::string wake_json(const char* name, const Pacing& pacing) {
-  if (!pacing.scheduler) return "";
+// The paced path's wake-ups: lateness and misses, printed and added to the JSON document.
+void wake_json(const char* name, const Pacing& pacing, nlohmann::ordered_json& j) {
+  if (!pacing.scheduler) return;
   char head[128];
   std::snprintf(head, sizeof head, "%s wake-ups", name);
   print(head, pacing.scheduler->wake_late_us(), "periods");
   std::printf("%-22s %ld deadline misses (woke more than half a period late)\n", "", pacing.scheduler->misses());
-  return ", " + pacing.scheduler->wake_late_us().json((std::string(name) + "_wake_late_us").c_str()) + ", \"" + name +
-         "_deadline_misses\": " + std::to_string(pacing.scheduler->misses());
+  j[std::string(name) + "_wake_late_us"] = gausstrack::nodes::percentiles_json(pacing.scheduler->wake_late_us());
+  j[std::string(name) + "_deadline_misses"] = pacing.scheduler->misses();
 }
 
 // The cyclictest-style floor: the paced loop with nothing in it.
@@ -235,31 +236,34 @@ int main(int argc, char** argv) {
   Pacing pacing;
   pacing.cpus = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
   std::string url = "udpm://239.255.76.67:7671?ttl=0", out;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--round-trips" && i + 1 < argc) n = std::atol(argv[++i]);
-    else if (a == "--rate" && i + 1 < argc) pacing.rate_hz = std::atof(argv[++i]);
-    else if (a == "--seconds" && i + 1 < argc) seconds = std::atof(argv[++i]);
-    else if (a == "--realtime") pacing.realtime = true;
-    else if (a == "--cpus" && i + 1 < argc) {
-      if (std::sscanf(argv[++i], "%d,%d", &pacing.pacing_cpu, &pacing.answering_cpu) != 2 ||
-          pacing.pacing_cpu < 0 || pacing.answering_cpu < 0)
-        return std::fprintf(stderr, "error: --cpus takes two CPU numbers A,B (e.g. 1,1)\n"), 2;
-    }
-    else if (a == "--lcm-url" && i + 1 < argc) url = argv[++i];
-    else if (a == "--out" && i + 1 < argc) out = argv[++i];
-    else
-      return std::fprintf(stderr, "usage: %s [--round-trips N] [--rate HZ [--seconds S] [--realtime [--cpus A,B]]] "
-                                  "[--lcm-url URL] [--out FILE.json]\n", argv[0]), 2;
+  std::vector<int> cpus;
+  CLI::App app("LCM round trips between two processes beside raw UDP of the same sizes, back to back or paced.");
+  app.add_option("--round-trips", n, "round trips back to back")->check(CLI::PositiveNumber)->capture_default_str();
+  auto* rate = app.add_option("--rate", pacing.rate_hz, "pace one round trip per period at this rate [Hz]")
+                   ->check(CLI::Range(0.0, 1e6));
+  app.add_option("--seconds", seconds, "paced: for this long")->check(CLI::PositiveNumber)->capture_default_str()->needs(rate);
+  auto* realtime = app.add_flag("--realtime", pacing.realtime, "paced: SCHED_FIFO, pinned")->needs(rate);
+  app.add_option("--cpus", cpus, "realtime: the pacing and the answering process's CPUs, A,B")
+      ->delimiter(',')
+      ->expected(2)
+      ->check(CLI::NonNegativeNumber)
+      ->needs(realtime);
+  app.add_option("--lcm-url", url)->capture_default_str();
+  app.add_option("--out", out, "write the percentiles as JSON to this file");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // --help, or a usage error (printed)
   }
-  if (!(pacing.rate_hz >= 0) || pacing.rate_hz > 1e6 || !(seconds > 0))
-    return std::fprintf(stderr, "error: --rate must be in [0, 1e6] Hz and --seconds positive\n"), 2;
+  if (cpus.size() == 2) {
+    pacing.pacing_cpu = cpus[0];
+    pacing.answering_cpu = cpus[1];
+  }
   if (pacing.rate_hz > 0) n = std::max(1L, static_cast<long>(seconds * pacing.rate_hz));
-  if (n <= 0) return std::fprintf(stderr, "error: --round-trips must be positive\n"), 2;
   const auto capacity = static_cast<std::size_t>(n);
   LatencyRecorder lcm_us(capacity), udp_us(capacity);
   int state_bytes = 0, command_bytes = 0;
-  std::string wake;
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
 
   // The floor first, in the pacing process's own setting (the parent applies it after forking the
   // children, which apply theirs).
@@ -268,19 +272,17 @@ int main(int argc, char** argv) {
   pacing.apply(true);
   if (pacing.rate_hz > 0) {
     sleep_only(n, pacing);
-    wake += wake_json("sleep", pacing);
+    wake_json("sleep", pacing, j);
   }
   const bool lcm_ok = lcm_round_trips(url, n, pacing, lcm_us, state_bytes, command_bytes);
   if (!lcm_ok) kill(child, SIGTERM);
   int status = 0;
   waitpid(child, &status, 0);
   if (!lcm_ok) return std::fprintf(stderr, "error: LCM round trips failed on %s\n", url.c_str()), 1;
-  std::string lcm_wake;
-  if (pacing.rate_hz > 0) lcm_wake = wake_json("lcm", pacing);
+  if (pacing.rate_hz > 0) wake_json("lcm", pacing, j);
   if (!udp_round_trips(n, state_bytes, command_bytes, pacing, udp_us))
     return std::fprintf(stderr, "error: UDP loopback round trips failed\n"), 1;
-  std::string udp_wake;
-  if (pacing.rate_hz > 0) udp_wake = wake_json("udp", pacing);
+  if (pacing.rate_hz > 0) wake_json("udp", pacing, j);
 
   std::printf("round trip between two processes on loopback: state %d bytes out, command %d bytes back%s\n",
               state_bytes, command_bytes, pacing.rate_hz > 0 ? ", one per period" : ", back to back");
@@ -288,11 +290,17 @@ int main(int argc, char** argv) {
   print("raw udp (same sizes)", udp_us);
   std::printf("lcm / udp at p50: %.2f\n", lcm_us.quantile(0.5) / udp_us.quantile(0.5));
   if (!out.empty()) {
+    nlohmann::ordered_json doc = {{"round_trips", n},
+                                  {"rate_hz", pacing.rate_hz},
+                                  {"realtime", pacing.realtime},
+                                  {"state_bytes", state_bytes},
+                                  {"command_bytes", command_bytes},
+                                  {"lcm_url", url},
+                                  {"lcm_us", gausstrack::nodes::percentiles_json(lcm_us)},
+                                  {"udp_us", gausstrack::nodes::percentiles_json(udp_us)}};
+    doc.update(j);
     std::ofstream f(out);
-    f << "{\"round_trips\": " << n << ", \"rate_hz\": " << pacing.rate_hz
-      << ", \"realtime\": " << (pacing.realtime ? "true" : "false") << ", \"state_bytes\": " << state_bytes
-      << ", \"command_bytes\": " << command_bytes << ", \"lcm_url\": \"" << url << "\", " << lcm_us.json("lcm_us")
-      << ", " << udp_us.json("udp_us") << wake << lcm_wake << udp_wake << "}\n";
+    f << doc.dump(2) << '\n';
     if (!f) return std::fprintf(stderr, "error: cannot write %s\n", out.c_str()), 1;
   }
   return 0;

@@ -2,6 +2,7 @@
 // Runs the compiled-in model the configuration's tracking.model names (tracking/builtin_models.hpp).
 // Links the law, its configuration and the LCM types: nothing of the simulator.
 #include <cstdio>
+#include <optional>
 
 #include "gausstrack/nodes/controller_process.hpp"
 #include "gausstrack/tracking/builtin_models.hpp"
@@ -9,7 +10,7 @@
 int main(int argc, char** argv) {
   using namespace gausstrack;
   nodes::ControllerProcessOptions o;
-  if (const int code = nodes::parse_controller_options(argc, argv, o)) return code;
+  if (const std::optional<int> code = nodes::parse_controller_options(argc, argv, o)) return *code;
   try {
     const tracking::TrackingSpec spec = tracking::load_tracking(o.process.scene_path, o.process.sets);
     int code = 1;

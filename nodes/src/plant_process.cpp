@@ -6,8 +6,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
+#include "cli.hpp"
+#include "gausstrack/nodes/latency_json.hpp"
 #include "gausstrack/nodes/message_log.hpp"
 #include "gausstrack/nodes/plant_node.hpp"
 #include "gausstrack/nodes/process.hpp"
@@ -15,14 +19,122 @@
 #include "gausstrack/plant_sim/simulation.hpp"
 
 namespace gausstrack::nodes {
+
+void PlantNode::add_to_summary(nlohmann::ordered_json& j, long log_dropped) const {
+  j["mode"] = o_.lockstep ? "lockstep" : "realtime";
+  j["control_rate_hz"] = o_.rate_hz;
+  j["run_id"] = run_id_;
+  j["states_published"] = counts_.states_published;
+  j["commands_applied"] = counts_.commands_applied;
+  j["commands_missing"] = counts_.commands_missing;
+  j["commands_late"] = counts_.commands_late;
+  j["commands_failed"] = counts_.commands_failed;
+  j["deadline_misses"] = scheduler_.misses();
+  j["messages_rejected"] = counts_.rejected;
+  j["commands_of_other_runs"] = counts_.other_run;
+  j["states_resent"] = counts_.states_resent;
+  j["watchdog_trips"] = watchdog_.trips();
+  j["log_dropped"] = log_dropped;
+  j["round_trip_us"] = percentiles_json(round_trip_us_);
+  j["compute_ns"] = percentiles_json(compute_ns_);
+  j["wake_late_us"] = o_.lockstep ? nlohmann::ordered_json() : percentiles_json(scheduler_.wake_late_us());
+}
+
 namespace {
 
-int usage(const char* argv0) {
-  std::fprintf(stderr,
-               "usage: %s %s [--lockstep] [--out DIR] [--timeout-ms T] [--watchdog-ms W] "
-               "[--safe-action zero|hold]\n",
-               argv0, kCommonUsage);
-  return 2;
+struct PlantProcessOptions {
+  ProcessOptions process;
+  PlantNodeOptions node;
+  std::string out_dir = "out/plant";
+};
+
+std::optional<int> parse_plant_options(int argc, char** argv, PlantProcessOptions& o) {
+  CLI::App app("Simulates a scene's plant in real time (or lock-step): publishes its state each control period "
+               "over LCM and applies the controller's answer; writes the run to --out.");
+  add_process_options(app, o.process);
+  app.add_flag("--lockstep", o.node.lockstep, "wait for each command (not real time)");
+  app.add_option("--out", o.out_dir, "the run's directory")->capture_default_str();
+  app.add_option("--timeout-ms", o.node.timeout_ms, "give up when no controller answers for this long")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--watchdog-ms", o.node.watchdog_ms, "apply the safe action after this long without a command")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  std::string safe_action = "zero";
+  app.add_option("--safe-action", safe_action, "what the watchdog applies: zero force, or hold the last")
+      ->check(CLI::IsMember({"zero", "hold"}))
+      ->capture_default_str();
+  const std::optional<int> code = parse_command_line(app, argc, argv);
+  o.node.safe_hold = safe_action == "hold";
+  return code;
+}
+
+void write_latency_csv(const PlantNode& node, const std::string& path) {
+  std::ofstream csv(path);
+  csv << "state_sequence,round_trip_us,compute_ns\n";
+  const auto& seq = node.answered_sequences().values();
+  for (std::size_t k = 0; k < seq.size(); ++k)
+    csv << static_cast<long long>(seq[k]) << ',' << node.round_trip_us().values()[k] << ','
+        << node.compute_ns().values()[k] << '\n';
+  if (!csv) throw std::runtime_error("cannot write " + path);
+}
+
+void print_summary(const PlantNode& node, const plant_sim::RunResult& result, const loop_stats_t& stats,
+                   const std::string& out_dir) {
+  const PlantCounts& c = node.counts();
+  std::printf("gausstrack-plant: %zu samples, max tracking error %.3g, %ld states published, %ld commands "
+              "applied, %ld missing, %ld late, %ld failed solves, %ld deadline misses, %ld watchdog trips, %ld "
+              "messages rejected, round trip p50 %.1f us p99 %.1f us max %.1f us -> %s\n",
+              result.samples.size(), result.summary.max_tracking_error, c.states_published, c.commands_applied,
+              c.commands_missing, c.commands_late, c.commands_failed, node.scheduler().misses(),
+              node.watchdog().trips(), c.rejected, stats.round_trip_us_p50, stats.round_trip_us_p99,
+              stats.round_trip_us_max, out_dir.c_str());
+}
+
+// The scene over LCM: publishes states, applies commands, then writes the run's files and
+// statistics. Returns the exit code.
+int run_plant(const PlantProcessOptions& o, const plant_sim::Scene& scene, plant_sim::RunOptions run_options) {
+  using namespace plant_sim;
+  const ProcessOptions& p = o.process;
+  PlantNodeOptions node_options = o.node;
+  node_options.rate_hz = scene.control_rate;
+  node_options.periods = static_cast<std::size_t>(std::ceil(scene.duration * scene.control_rate)) + 16;
+  // The log's writer before the real-time options, LCM (and its receive thread) after them.
+  const auto log = open_message_log(p.log_path);
+  stop_on_signals();
+  apply_realtime(p, "gausstrack-plant");
+  lcm::LCM lcm(p.lcm_url);
+  if (!lcm.good()) return std::fprintf(stderr, "error: cannot open LCM (%s)\n", p.lcm_url.c_str()), 1;
+  // Lock-step is not real time: its log waits for the disk rather than drop a message.
+  Outbox state_out(lcm, p.state_channel, log.get(), node_options.lockstep || p.log_wait);
+  Outbox stats_out(lcm, p.stats_channel, log.get(), true);
+  PlantNode node(lcm, state_out, p.command_channel, scene.dof(), node_options);
+
+  run_options.on_progress = terminal_progress(scene);
+  run_options.sampled_control = [&](std::int64_t period, double t, std::span<const double> q,
+                                    std::span<const double> qd, std::span<double> u) {
+    return node.exchange(period, t, q, qd, u);
+  };
+  const RunResult result = run_scene(scene, run_options);
+
+  const loop_stats_t stats = node.stats();
+  stats_out.publish_message(stats);
+  const long log_dropped = close_message_log(log.get(), "gausstrack-plant", p.log_path);
+
+  std::filesystem::create_directories(o.out_dir);
+  write_trajectory_csv(scene, result, o.out_dir + "/trajectory.csv");
+  nlohmann::ordered_json summary = summary_json(scene, result);
+  node.add_to_summary(summary, log_dropped);
+  write_json(summary, o.out_dir + "/summary.json");
+  write_latency_csv(node, o.out_dir + "/latency.csv");
+  print_summary(node, result, stats, o.out_dir);
+  if (!result.summary.failure.empty()) {
+    std::fprintf(stderr, "error: %s (data up to then written to %s)\n", result.summary.failure.c_str(),
+                 o.out_dir.c_str());
+    return 1;
+  }
+  // Interrupted by a signal: the data up to then is written and the run counts as done.
+  return result.summary.stopped_early && !g_stop_requested ? 1 : 0;
 }
 
 }  // namespace
@@ -30,90 +142,17 @@ int usage(const char* argv0) {
 int plant_main(int argc, char** argv, std::vector<plant_sim::ModelFactory> models,
                std::vector<plant_sim::EngineFactory> engines) {
   using namespace plant_sim;
-  ProcessOptions options;
-  PlantNodeOptions node_options;
-  std::string out_dir = "out/plant", error;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (parse_common_option(argc, argv, i, options, error)) {
-      if (!error.empty()) return std::fprintf(stderr, "error: %s\n", error.c_str()), 2;
-    } else if (a == "--out" && has_value) {
-      out_dir = argv[++i];
-    } else if ((a == "--timeout-ms" || a == "--watchdog-ms") && has_value) {
-      const int v = std::atoi(argv[++i]);
-      if (v <= 0) return std::fprintf(stderr, "error: %s takes a positive number of ms\n", a.c_str()), 2;
-      (a == "--timeout-ms" ? node_options.timeout_ms : node_options.watchdog_ms) = v;
-    } else if (a == "--safe-action" && has_value) {
-      const std::string v = argv[++i];
-      if (v != "zero" && v != "hold") return std::fprintf(stderr, "error: --safe-action is zero or hold\n"), 2;
-      node_options.safe_hold = v == "hold";
-    } else if (a == "--lockstep") {
-      node_options.lockstep = true;
-    } else {
-      return usage(argv[0]);
-    }
-  }
-  if (options.scene_path.empty()) return std::fprintf(stderr, "error: --scene is required\n"), usage(argv[0]);
+  PlantProcessOptions o;
+  if (const std::optional<int> code = parse_plant_options(argc, argv, o)) return *code;
   try {
-    const Scene scene = load_scene(options.scene_path, options.sets);
+    const Scene scene = load_scene(o.process.scene_path, o.process.sets);
     if (scene.control_mode != ControlMode::kSampled)
-      throw SceneError(options.scene_path + ": the plant process needs control.mode: sampled (add --set "
-                                            "control.mode=sampled --set control.rate=HZ)");
-    node_options.rate_hz = scene.control_rate;
-    node_options.periods = static_cast<std::size_t>(std::ceil(scene.duration * scene.control_rate)) + 16;
-    // The log's writer before the real-time options, LCM (and its receive thread) after them.
-    const auto log = open_message_log(options.log_path);
-    stop_on_signals();
-    apply_realtime(options, "gausstrack-plant");
-    lcm::LCM lcm(options.lcm_url);
-    if (!lcm.good()) return std::fprintf(stderr, "error: cannot open LCM (%s)\n", options.lcm_url.c_str()), 1;
-    // Lock-step is not real time: its log waits for the disk rather than drop a message.
-    Outbox state_out(lcm, options.state_channel, log.get(), node_options.lockstep || options.log_wait);
-    Outbox stats_out(lcm, options.stats_channel, log.get(), true);
-    PlantNode node(lcm, state_out, options.command_channel, scene.dof(), node_options);
-
+      throw SceneError(o.process.scene_path + ": the plant process needs control.mode: sampled (add --set "
+                                              "control.mode=sampled --set control.rate=HZ)");
     RunOptions run_options;
     run_options.models = std::move(models);
     run_options.engines = std::move(engines);
-    run_options.on_progress = terminal_progress(scene);
-    run_options.sampled_control = [&](std::int64_t period, double t, std::span<const double> q,
-                                      std::span<const double> qd, std::span<double> u) {
-      return node.exchange(period, t, q, qd, u);
-    };
-    const RunResult result = run_scene(scene, run_options);
-
-    const loop_stats_t stats = node.stats();
-    stats_out.publish_message(stats);
-    const long log_dropped = close_message_log(log.get(), "gausstrack-plant", options.log_path);
-
-    std::filesystem::create_directories(out_dir);
-    write_trajectory_csv(scene, result, out_dir + "/trajectory.csv");
-    write_summary_json(scene, result, out_dir + "/summary.json", node.summary_members(log_dropped));
-    {
-      std::ofstream csv(out_dir + "/latency.csv");
-      csv << "state_sequence,round_trip_us,compute_ns\n";
-      const auto& seq = node.answered_sequences().values();
-      for (std::size_t k = 0; k < seq.size(); ++k)
-        csv << static_cast<long long>(seq[k]) << ',' << node.round_trip_us().values()[k] << ','
-            << node.compute_ns().values()[k] << '\n';
-      if (!csv) throw std::runtime_error("cannot write " + out_dir + "/latency.csv");
-    }
-    const PlantCounts& c = node.counts();
-    std::printf("gausstrack-plant: %zu samples, max tracking error %.3g, %ld states published, %ld commands "
-                "applied, %ld missing, %ld late, %ld failed solves, %ld deadline misses, %ld watchdog trips, %ld "
-                "messages rejected, round trip p50 %.1f us p99 %.1f us max %.1f us -> %s\n",
-                result.samples.size(), result.summary.max_tracking_error, c.states_published, c.commands_applied,
-                c.commands_missing, c.commands_late, c.commands_failed, node.scheduler().misses(),
-                node.watchdog().trips(), c.rejected, stats.round_trip_us_p50, stats.round_trip_us_p99,
-                stats.round_trip_us_max, out_dir.c_str());
-    if (!result.summary.failure.empty()) {
-      std::fprintf(stderr, "error: %s (data up to then written to %s)\n", result.summary.failure.c_str(),
-                   out_dir.c_str());
-      return 1;
-    }
-    // Interrupted by a signal: the data up to then is written and the run counts as done.
-    return result.summary.stopped_early && !g_stop_requested ? 1 : 0;
+    return run_plant(o, scene, std::move(run_options));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

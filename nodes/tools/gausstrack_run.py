@@ -104,15 +104,18 @@ class Process:
         return self.proc.returncode
 
 
-def main(argv):
-    args = parse(argv)
-    scene_name = os.path.splitext(os.path.basename(args.scene))[0]
+def fresh_output_dir(args, scene_name):
+    """The run's directory, without the files of an earlier run."""
     out = args.out or os.path.join("out", "run", scene_name)
     os.makedirs(out, exist_ok=True)
     for stale in ("summary.json", "trajectory.csv", "latency.csv", "controller.json"):
         if os.path.exists(os.path.join(out, stale)):
             os.remove(os.path.join(out, stale))
+    return out
 
+
+def command_lines(args, out):
+    """The arguments both processes share, each one's real-time options and log, and the logs to merge."""
     sets = list(args.set) + ["control.mode=sampled", f"control.rate={args.rate:g}"]
     if args.duration is not None:
         sets.append(f"duration={args.duration:g}")
@@ -124,61 +127,43 @@ def main(argv):
                "--stats-channel", f"{prefix}_STATS"]
     if args.lcm_url:
         common += ["--lcm-url", args.lcm_url]
-    cpus = os.cpu_count() or 1
-    rt_plant, rt_controller = [], []
+    own = {"controller": [], "plant": []}
     if args.realtime:
+        cpus = os.cpu_count() or 1
         plant_cpu, controller_cpu = args.cpus or (cpus - 1, max(0, cpus - 2))
-        rt_plant = ["--rt-priority", "80", "--lock-memory", "--cpu", str(plant_cpu)]
-        rt_controller = ["--rt-priority", "80", "--lock-memory", "--cpu", str(controller_cpu)]
-
+        for name, cpu in (("plant", plant_cpu), ("controller", controller_cpu)):
+            own[name] += ["--rt-priority", "80", "--lock-memory", "--cpu", str(cpu)]
     part_logs = []
-    log_args = {"controller": [], "plant": []}
     if args.log:
         if os.path.exists(args.log):
             os.remove(args.log)
-        for name in log_args:
+        for name in own:
             path = os.path.join(out, f"{name}.lcmlog")
             part_logs.append(path)
-            log_args[name] = ["--log", path] + (["--log-wait"] if args.lockstep else [])
+            own[name] += ["--log", path] + (["--log-wait"] if args.lockstep else [])
+    own["controller"] += ["--stats-out", os.path.join(out, "controller.json")]
+    own["plant"] += ["--out", out, "--watchdog-ms", str(args.watchdog_ms), "--safe-action", args.safe_action,
+                     "--timeout-ms", str(args.timeout_ms)] + (["--lockstep"] if args.lockstep else [])
+    return common, own, part_logs
 
-    controller = Process("gausstrack-controller",
-                         [tool("gausstrack-controller")] + common + rt_controller + log_args["controller"] +
-                         ["--stats-out", os.path.join(out, "controller.json")],
-                         os.path.join(out, "controller.log"))
-    while not controller.ready.wait(0.05):
-        if controller.proc.poll() is not None:
-            controller.stop()
-            print("\n".join(controller.lines), file=sys.stderr)
-            return 1
 
-    plant_cmd = [tool("gausstrack-plant")] + common + rt_plant + log_args["plant"] + [
-        "--out", out, "--watchdog-ms", str(args.watchdog_ms), "--safe-action", args.safe_action,
-        "--timeout-ms", str(args.timeout_ms)]
-    if args.lockstep:
-        plant_cmd.append("--lockstep")
-    mode = "lock-step" if args.lockstep else "real time"
-    print(f"gausstrack-run: {scene_name} at {args.rate:g} Hz, {mode}, output in {out}", flush=True)
-    plant = Process("gausstrack-plant", plant_cmd, os.path.join(out, "plant.log"))
-    try:
-        plant.proc.wait()
-    except KeyboardInterrupt:  # the plant got the SIGINT too: it writes what it has and stops
-        plant.proc.wait()
-    plant_status = plant.stop()
-    controller_status = controller.stop()
-    log_status = 0
-    if args.log:
-        merge = subprocess.run([tool("gausstrack-log-merge"), args.log] + part_logs, capture_output=True, text=True)
-        log_status = merge.returncode
-        if log_status != 0:
-            print(f"gausstrack-run: merging the logs failed:\n{merge.stderr}", file=sys.stderr)
-        else:
-            for path in part_logs:
-                os.remove(path)
+def merge_logs(args, part_logs):
+    """Joins the processes' logs into --log; returns the merge's status."""
+    merge = subprocess.run([tool("gausstrack-log-merge"), args.log] + part_logs, capture_output=True, text=True)
+    if merge.returncode != 0:
+        print(f"gausstrack-run: merging the logs failed:\n{merge.stderr}", file=sys.stderr)
+    else:
+        for path in part_logs:
+            os.remove(path)
+    return merge.returncode
 
+
+def merged_summary(args, out, plant_status, controller_status):
+    """The plant's summary.json with the controller's counts added, rewritten in place; None without one."""
     summary_path = os.path.join(out, "summary.json")
     if not os.path.exists(summary_path):
         print(f"gausstrack-run: the plant wrote no summary (status {plant_status})", file=sys.stderr)
-        return 1
+        return None
     with open(summary_path) as f:
         summary = json.load(f)
     ctrl = {}
@@ -203,7 +188,10 @@ def main(argv):
     with open(summary_path, "w") as f:
         json.dump(summary, f, indent=2)
         f.write("\n")
+    return summary
 
+
+def print_summary(args, scene_name, mode, summary, summary_path):
     rt, cp = summary["round_trip_us"], summary["compute_ns"]
     wl = summary.get("wake_late_us") or {}
     print(f"""
@@ -216,18 +204,54 @@ def main(argv):
   commands applied    {summary['commands_applied']} (missing {summary['commands_missing']}, \
 late {summary['commands_late']})
   deadline misses     {summary['deadline_misses']}
-  messages rejected   {summary['messages_rejected']} (plant {plant_rejected}, controller {controller_rejected})
+  messages rejected   {summary['messages_rejected']} (plant {summary['messages_rejected_by_plant']}, \
+controller {summary['messages_rejected_by_controller']})
   watchdog trips      {summary['watchdog_trips']}
   written             {summary_path}""")
     if args.log:
         print(f"  log                 {args.log} ({summary['log_dropped']} messages dropped)")
 
+
+def draw_plots(out):
+    plots = subprocess.run(["/usr/bin/python3", tool("plot_run.py"), out], capture_output=True, text=True)
+    if plots.returncode != 0:
+        print(f"gausstrack-run: plotting failed:\n{plots.stderr}", file=sys.stderr)
+    for line in plots.stdout.split():
+        print(f"  figure              {line}")
+
+
+def main(argv):
+    args = parse(argv)
+    scene_name = os.path.splitext(os.path.basename(args.scene))[0]
+    out = fresh_output_dir(args, scene_name)
+    common, own, part_logs = command_lines(args, out)
+
+    controller = Process("gausstrack-controller", [tool("gausstrack-controller")] + common + own["controller"],
+                         os.path.join(out, "controller.log"))
+    while not controller.ready.wait(0.05):
+        if controller.proc.poll() is not None:
+            controller.stop()
+            print("\n".join(controller.lines), file=sys.stderr)
+            return 1
+
+    mode = "lock-step" if args.lockstep else "real time"
+    print(f"gausstrack-run: {scene_name} at {args.rate:g} Hz, {mode}, output in {out}", flush=True)
+    plant = Process("gausstrack-plant", [tool("gausstrack-plant")] + common + own["plant"],
+                    os.path.join(out, "plant.log"))
+    try:
+        plant.proc.wait()
+    except KeyboardInterrupt:  # the plant got the SIGINT too: it writes what it has and stops
+        plant.proc.wait()
+    plant_status = plant.stop()
+    controller_status = controller.stop()
+    log_status = merge_logs(args, part_logs) if args.log else 0
+
+    summary = merged_summary(args, out, plant_status, controller_status)
+    if summary is None:
+        return 1
+    print_summary(args, scene_name, mode, summary, os.path.join(out, "summary.json"))
     if not args.no_plots:
-        plots = subprocess.run(["/usr/bin/python3", tool("plot_run.py"), out], capture_output=True, text=True)
-        if plots.returncode != 0:
-            print(f"gausstrack-run: plotting failed:\n{plots.stderr}", file=sys.stderr)
-        for line in plots.stdout.split():
-            print(f"  figure              {line}")
+        draw_plots(out)
     return 0 if plant_status == 0 and controller_status == 0 and log_status == 0 else 1
 
 

@@ -1,6 +1,7 @@
 // gausstrack-sim SCENE.yaml [--out DIR] [--set key=value ...]
 // Runs a scene in one process and writes DIR/trajectory.csv and DIR/summary.json.
-#include <csignal>
+#include <CLI/CLI.hpp>
+
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -8,40 +9,26 @@
 
 #include "gausstrack/plant_sim/scene.hpp"
 #include "gausstrack/plant_sim/simulation.hpp"
+#include "gausstrack/tracking/stop_request.hpp"
 #ifdef GAUSSTRACK_HAVE_MUJOCO
 #include "gausstrack/plant_sim/mujoco.hpp"
 #endif
-
-namespace {
-
-volatile std::sig_atomic_t g_interrupted = 0;
-
-int usage(const char* argv0) {
-  std::fprintf(stderr, "usage: %s SCENE.yaml [--out DIR] [--set key=value ...]\n", argv0);
-  return 2;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   using namespace gausstrack::plant_sim;
   std::string scene_path, out_dir = "out/sim";
   std::vector<std::string> sets;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--out" && i + 1 < argc) {
-      out_dir = argv[++i];
-    } else if (a == "--set" && i + 1 < argc) {
-      sets.emplace_back(argv[++i]);
-    } else if (a == "-h" || a == "--help") {
-      return usage(argv[0]), 0;
-    } else if (!a.empty() && a[0] != '-' && scene_path.empty()) {
-      scene_path = a;
-    } else {
-      return usage(argv[0]);
-    }
+  CLI::App app("Runs a scene in one process: the plant, the effects it lists and the tracking law of eq. (32); "
+               "writes DIR/trajectory.csv and DIR/summary.json.");
+  app.add_option("scene", scene_path, "the scene file (YAML)")->required();
+  app.add_option("--out", out_dir, "the run's directory")->capture_default_str();
+  app.add_option("--set", sets, "override a key of the scene: dotted.key=value (repeatable)")
+      ->allow_extra_args(false);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // --help, or a usage error (printed)
   }
-  if (scene_path.empty()) return usage(argv[0]);
 
   try {
     const Scene scene = load_scene(scene_path, sets);
@@ -51,9 +38,8 @@ int main(int argc, char** argv) {
     options.engines.push_back(mujoco_engine());
 #endif
     // Ctrl-C (or SIGTERM) stops the run where it is; what it computed is written.
-    std::signal(SIGINT, [](int) { g_interrupted = 1; });
-    std::signal(SIGTERM, [](int) { g_interrupted = 1; });
-    options.stop_requested = [] { return g_interrupted != 0; };
+    gausstrack::stop_on_signals();
+    options.stop_requested = [] { return gausstrack::g_stop_requested != 0; };
     const RunResult result = run_scene(scene, options);
     std::filesystem::create_directories(out_dir);
     write_trajectory_csv(scene, result, out_dir + "/trajectory.csv");
@@ -73,7 +59,7 @@ int main(int argc, char** argv) {
                    reached);
       return 1;
     }
-    if (g_interrupted) {
+    if (gausstrack::g_stop_requested) {
       std::fprintf(stderr, "gausstrack-sim: interrupted; samples up to t = %g s written\n", reached);
       return 130;
     }

@@ -8,18 +8,9 @@
 
 namespace gausstrack::tracking {
 
-std::optional<InverseStrategy> strategy_from_name(std::string_view name) {
-  for (InverseStrategy s : kStrategies)
-    if (name == to_string(s)) return s;
-  return std::nullopt;
-}
+std::optional<InverseStrategy> strategy_from_name(std::string_view name) { return from_name(kStrategies, name); }
 
-std::string strategy_names() {
-  std::string names;
-  for (InverseStrategy s : kStrategies)
-    names += (names.empty() ? "" : ", ") + std::string(to_string(s));
-  return names;
-}
+std::string strategy_names() { return names_of(kStrategies); }
 
 std::string builtin_model_names() {
   std::string names;
@@ -76,11 +67,7 @@ TrackingSpec read_tracking(const Reader& t) {
   tr.force_limit = t.positive("force_limit", tr.force_limit);
   tr.min_singular_value = t.non_negative("min_singular_value", tr.min_singular_value);
   if (t.has("strategy")) {
-    const std::string name = t.text("strategy");
-    const auto strategy = strategy_from_name(name);
-    if (!strategy)
-      t.child("strategy").fail("unknown strategy '" + name + "' (known: " + strategy_names() + ")");
-    tr.strategy = *strategy;
+    tr.strategy = t.choice("strategy", kStrategies, "strategy");
   }
   return tr;
 }

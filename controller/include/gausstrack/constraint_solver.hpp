@@ -208,41 +208,10 @@ class ConstraintSolver {
  private:
   Status solve_plain(const MatrixNN& A, const VectorN& f, const VectorN& Q, const MatrixPN& D, const VectorP& g,
                      Solution& out) noexcept {
-    using small_dense::all_finite;
-    using small_dense::squared_norm;
     ready_ = false;
     out.diagnostics = SolveDiagnostics<Scalar>{};
-    SolveDiagnostics<Scalar>& diag = out.diagnostics;
-
-    // A and D equal to the factored ones are finite and need no new factorization.
-    const bool same_mass = factored_ && options_.reuse_factorization && mass_equals(A);
-    const bool same_factors = same_mass && small_dense::all_equal(D.data(), d_key_.data(), P * N);
-    std::uint32_t bad = 0;
-    if (!same_mass && !mass_finite(A)) bad |= input::kMassMatrix;
-    if (!all_finite(f.data(), N)) bad |= input::kNonlinearForce;
-    if (!all_finite(Q.data(), N)) bad |= input::kAppliedForce;
-    if (!same_factors && !all_finite(D.data(), P * N)) bad |= input::kConstraintMatrix;
-    if (!all_finite(g.data(), P)) bad |= input::kConstraintRhs;
-    if (bad != 0) {
-      diag.non_finite_inputs = bad;
-      return fail(out, Status::kNonFiniteInput);
-    }
-
-    if (!same_factors) {
-      factored_ = false;
-      if (!same_mass && !factor_mass(A)) return fail(out, Status::kMassMatrixNotPositiveDefinite);
-      d_key_ = D;
-      d_norm2_ = squared_norm(D.data(), P * N);
-      set_bt(D);  // B^T = L^-1 D^T
-      factor_diagnostics_ = SolveDiagnostics<Scalar>{};
-      // B or its factors overflowed (entries near the range limit): nothing below could be
-      // trusted, and a factorization of non-finite numbers is not kept.
-      if (!all_finite(bt_.data(), N * P) || !factorize(factor_diagnostics_)) {
-        return fail(out, Status::kNonFiniteResult);
-      }
-      factored_ = true;
-    }
-    diag = factor_diagnostics_;
+    if (const Status s = check_and_factor(A, f, Q, D, g, out); failed(s)) return s;
+    out.diagnostics = factor_diagnostics_;
 
     // a = A^-1 (Q - f); right sides of the two eq. (32) terms, -D a and g, solved together.
     VectorN& a = out.unconstrained_acceleration;
@@ -269,10 +238,50 @@ class ConstraintSolver {
     for (int i = 0; i < N; ++i) out.acceleration(i) = a(i) + dq(i);
 
     // Both parts are finite when their sum is (an Inf or NaN part makes the sum Inf or NaN).
-    if (!all_finite(out.acceleration.data(), N) || !all_finite(out.constraint_force.data(), N)) {
+    if (!small_dense::all_finite(out.acceleration.data(), N) ||
+        !small_dense::all_finite(out.constraint_force.data(), N)) {
       return fail(out, Status::kNonFiniteResult);
     }
+    set_warnings(D, g, out);
+    ready_ = true;
+    return out.diagnostics.status;
+  }
 
+  // The inputs' checks, then the factorizations of A and of the constraint rows, unless A and D
+  // equal the factored ones (which are finite and need no new factorization).
+  Status check_and_factor(const MatrixNN& A, const VectorN& f, const VectorN& Q, const MatrixPN& D,
+                          const VectorP& g, Solution& out) noexcept {
+    using small_dense::all_finite;
+    const bool same_mass = factored_ && options_.reuse_factorization && mass_equals(A);
+    const bool same_factors = same_mass && small_dense::all_equal(D.data(), d_key_.data(), P * N);
+    std::uint32_t bad = 0;
+    if (!same_mass && !mass_finite(A)) bad |= input::kMassMatrix;
+    if (!all_finite(f.data(), N)) bad |= input::kNonlinearForce;
+    if (!all_finite(Q.data(), N)) bad |= input::kAppliedForce;
+    if (!same_factors && !all_finite(D.data(), P * N)) bad |= input::kConstraintMatrix;
+    if (!all_finite(g.data(), P)) bad |= input::kConstraintRhs;
+    if (bad != 0) {
+      out.diagnostics.non_finite_inputs = bad;
+      return fail(out, Status::kNonFiniteInput);
+    }
+    if (same_factors) return Status::kOk;
+    factored_ = false;
+    if (!same_mass && !factor_mass(A)) return fail(out, Status::kMassMatrixNotPositiveDefinite);
+    d_key_ = D;
+    d_norm2_ = small_dense::squared_norm(D.data(), P * N);
+    set_bt(D);  // B^T = L^-1 D^T
+    factor_diagnostics_ = SolveDiagnostics<Scalar>{};
+    // B or its factors overflowed (entries near the range limit): nothing below could be
+    // trusted, and a factorization of non-finite numbers is not kept.
+    if (!all_finite(bt_.data(), N * P) || !factorize(factor_diagnostics_)) return fail(out, Status::kNonFiniteResult);
+    factored_ = true;
+    return Status::kOk;
+  }
+
+  // The residual |D q'' - g| against the tolerance, the rank and the condition: the warnings.
+  void set_warnings(const MatrixPN& D, const VectorP& g, Solution& out) const noexcept {
+    using small_dense::squared_norm;
+    SolveDiagnostics<Scalar>& diag = out.diagnostics;
     // Squared norms: one square root (the reported residual), none for the scale.
     VectorP residual;
     small_dense::multiply(D.data(), P, N, out.acceleration.data(), residual.data());
@@ -294,8 +303,6 @@ class ConstraintSolver {
     if (!met) diag.warnings |= warning::kConstraintsNotMet;
     if (diag.rank < P) diag.warnings |= warning::kRankDeficient;
     if (diag.condition_estimate > options_.warn_condition) diag.warnings |= warning::kIllConditioned;
-    ready_ = true;
-    return diag.status;
   }
 
   // --- The mass matrix's factor L (A = L L^T), dense or diagonal. ---

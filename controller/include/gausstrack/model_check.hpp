@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "gausstrack/model.hpp"
 #include "gausstrack/small_dense.hpp"
@@ -50,11 +51,143 @@ struct ModelCheckReport {
 };
 
 namespace detail {
+
 inline void appendf(std::string& s, const char* format, double a, double b = 0, double c = 0, double d = 0) {
   char line[256];
   std::snprintf(line, sizeof line, format, a, b, c, d);
   s += line;
 }
+
+// Every output finite; if not, the report names the terms that are not.
+template <Model M>
+bool check_finite(const TermsOf<M>& at, ModelCheckReport& r) {
+  const std::pair<bool, const char*> terms[] = {
+      {at.mass_matrix.allFinite(), " A"},           {at.nonlinear_force.allFinite(), " f"},
+      {at.applied_force.allFinite(), " Q"},         {at.constraint_matrix.allFinite(), " D"},
+      {at.constraint_rhs.allFinite(), " g"},        {at.constraint_error.allFinite(), " e"},
+      {at.constraint_error_rate.allFinite(), " e'"}};
+  r.all_finite = std::all_of(std::begin(terms), std::end(terms), [](const auto& t) { return t.first; });
+  if (r.all_finite) return true;
+  ++r.failures;
+  r.text += "FAIL  non-finite output:";
+  for (const auto& [finite, name] : terms)
+    if (!finite) r.text += name;
+  r.text += "\n";
+  return false;
+}
+
+// A symmetric positive definite, and diagonal when the model declares it so (the solver then
+// reads its diagonal only: anything else would be ignored).
+template <Model M>
+void check_mass_matrix(const TermsOf<M>& at, ModelCheckReport& r) {
+  using S = typename M::Scalar;
+  constexpr int N = M::kDof;
+  const S a_max = at.mass_matrix.cwiseAbs().maxCoeff();
+  r.asymmetry = a_max > S(0) ? double((at.mass_matrix - at.mass_matrix.transpose()).cwiseAbs().maxCoeff() / a_max)
+                             : 0.0;
+  Eigen::Matrix<S, N, N> factor = at.mass_matrix;
+  r.mass_matrix_positive_definite =
+      small_dense::cholesky_in_place(factor) && small_dense::all_finite(factor.data(), N * N);
+  const double symmetric_tol = 100 * double(std::numeric_limits<S>::epsilon());
+  if (r.asymmetry > symmetric_tol) {
+    ++r.failures;
+    appendf(r.text, "FAIL  A is not symmetric: max |A - A^T| / max |A| = %.3g\n", r.asymmetry);
+  } else if (!r.mass_matrix_positive_definite) {
+    ++r.failures;
+    r.text += "FAIL  A is not positive definite (Cholesky failed)\n";
+  } else {
+    r.text += "ok    A symmetric positive definite\n";
+  }
+  if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal) {
+    Eigen::Matrix<S, N, N> off = at.mass_matrix;
+    off.diagonal().setZero();
+    const S off_max = off.cwiseAbs().maxCoeff();
+    if (off_max != S(0)) {
+      ++r.failures;
+      appendf(r.text, "FAIL  A is declared diagonal (kMassMatrix) but max |A_ij|, i != j, = %.3g\n", double(off_max));
+    } else {
+      r.text += "ok    A diagonal, as declared\n";
+    }
+  }
+}
+
+// Fourth-order central differences at s = 0 along the motion (de/ds, de'/ds) and in each velocity
+// direction (de'/dq'), with the terms at s = 0 and one step ahead.
+template <Model M>
+struct Differences {
+  using S = typename M::Scalar;
+  using VectorN = Eigen::Matrix<S, M::kDof, 1>;
+  using VectorP = Eigen::Matrix<S, M::kConstraints, 1>;
+  TermsOf<M> at, ahead;
+  VectorP de, drate;
+  Eigen::Matrix<S, M::kConstraints, M::kDof> drate_dqd;
+
+  Differences(const M& m, const VectorN& q, const VectorN& qd, const VectorN& qdd, S t, S step) {
+    evaluate_model(m, q, qd, t, at);
+    const S h = step * (S(1) + q.cwiseAbs().maxCoeff() + qd.cwiseAbs().maxCoeff() + std::abs(t));
+    auto along = [&](S s) {
+      TermsOf<M> x;
+      evaluate_model(m, VectorN(q + qd * s + qdd * (s * s / S(2))), VectorN(qd + qdd * s), t + s, x);
+      return x;
+    };
+    const TermsOf<M> m1 = along(-h), p2 = along(2 * h), m2 = along(-2 * h);
+    ahead = along(h);
+    de = central(ahead.constraint_error, m1.constraint_error, p2.constraint_error, m2.constraint_error, h);
+    drate = central(ahead.constraint_error_rate, m1.constraint_error_rate, p2.constraint_error_rate,
+                    m2.constraint_error_rate, h);
+    const S hv = step * (S(1) + qd.cwiseAbs().maxCoeff());
+    for (int j = 0; j < M::kDof; ++j) {
+      auto rate_at = [&](S s) {
+        TermsOf<M> x;
+        VectorN qds = qd;
+        qds(j) += s;
+        evaluate_model(m, q, qds, t, x);
+        return VectorP(x.constraint_error_rate);
+      };
+      drate_dqd.col(j) = central(rate_at(hv), rate_at(-hv), rate_at(2 * hv), rate_at(-2 * hv), hv);
+    }
+  }
+
+  static VectorP central(const VectorP& p1, const VectorP& m1, const VectorP& p2, const VectorP& m2, S h) {
+    return (S(8) * (p1 - m1) - (p2 - m2)) / (S(12) * h);
+  }
+};
+
+// Row i's e', D q'' - g and D against the differences. False when any disagrees (the report says
+// which, with both values).
+template <Model M>
+bool check_row(int i, const char* head, bool has_e, const Differences<M>& d,
+               const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& qdd, double tol, ModelCheckReport& r) {
+  using S = typename M::Scalar;
+  const TermsOf<M>& at = d.at;
+  bool row_ok = true;
+  auto report = [&](double mismatch, double& worst, const std::string& format, double a, double b) {
+    worst = std::max(worst, mismatch);
+    if (mismatch <= tol) return;
+    row_ok = false;
+    appendf(r.text, ("FAIL  " + std::string(head) + format).c_str(), a, b, mismatch);
+  };
+  if (has_e) {
+    const S rate = at.constraint_error_rate(i);
+    const double scale = 1 + std::abs(double(rate)) + std::abs(double(d.de(i)));
+    report(std::abs(double(d.de(i) - rate)) / scale, r.worst_rate_mismatch,
+           ": de/ds = %.10g but e' = %.10g (relative %.2g)\n", double(d.de(i)), double(rate));
+  }
+  const S expected = (at.constraint_matrix.row(i) * qdd)(0) - at.constraint_rhs(i);
+  const double scale = 1 + std::abs(double(expected)) + std::abs(double(d.drate(i))) +
+                       double(at.constraint_matrix.row(i).cwiseAbs().sum() * qdd.cwiseAbs().maxCoeff());
+  report(std::abs(double(d.drate(i) - expected)) / scale, r.worst_rhs_mismatch,
+         ": de'/ds = %.10g but D q'' - g = %.10g (relative %.2g): g or D is wrong\n", double(d.drate(i)),
+         double(expected));
+  for (int j = 0; j < M::kDof; ++j) {
+    const S entry = at.constraint_matrix(i, j);
+    const std::string column = ": de'/dq'_" + std::to_string(j) + " = %.10g but D = %.10g (relative %.2g)\n";
+    report(std::abs(double(d.drate_dqd(i, j) - entry)) / (1 + std::abs(double(entry))), r.worst_matrix_mismatch, column,
+           double(d.drate_dqd(i, j)), double(entry));
+  }
+  return row_ok;
+}
+
 }  // namespace detail
 
 /// Checks model `m` at (q, q', t), moving along the motion with acceleration `qdd` (any
@@ -65,156 +198,33 @@ ModelCheckReport check_model(const M& m, const Eigen::Matrix<typename M::Scalar,
                              const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& qdd, typename M::Scalar t,
                              const ModelCheckOptions<typename M::Scalar>& options = {}) {
   using S = typename M::Scalar;
-  constexpr int N = M::kDof;
-  constexpr int P = M::kConstraints;
   using Layout = RowLayout<M>;
-  using VectorN = Eigen::Matrix<S, N, 1>;
-  using VectorP = Eigen::Matrix<S, P, 1>;
   ModelCheckReport r;
-  std::string& out = r.text;
-
-  TermsOf<M> at;
-  evaluate_model(m, q, qd, t, at);
-  r.all_finite = at.mass_matrix.allFinite() && at.nonlinear_force.allFinite() && at.applied_force.allFinite() &&
-                 at.constraint_matrix.allFinite() && at.constraint_rhs.allFinite() &&
-                 at.constraint_error.allFinite() && at.constraint_error_rate.allFinite();
-  if (!r.all_finite) {
-    ++r.failures;
-    out += "FAIL  non-finite output:";
-    if (!at.mass_matrix.allFinite()) out += " A";
-    if (!at.nonlinear_force.allFinite()) out += " f";
-    if (!at.applied_force.allFinite()) out += " Q";
-    if (!at.constraint_matrix.allFinite()) out += " D";
-    if (!at.constraint_rhs.allFinite()) out += " g";
-    if (!at.constraint_error.allFinite()) out += " e";
-    if (!at.constraint_error_rate.allFinite()) out += " e'";
-    out += "\n";
-    return r;
-  }
-
-  const S a_max = at.mass_matrix.cwiseAbs().maxCoeff();
-  r.asymmetry = a_max > S(0) ? double((at.mass_matrix - at.mass_matrix.transpose()).cwiseAbs().maxCoeff() / a_max)
-                             : 0.0;
-  Eigen::Matrix<S, N, N> factor = at.mass_matrix;
-  r.mass_matrix_positive_definite =
-      small_dense::cholesky_in_place(factor) && small_dense::all_finite(factor.data(), N * N);
-  const double symmetric_tol = 100 * double(std::numeric_limits<S>::epsilon());
-  if (r.asymmetry > symmetric_tol) {
-    ++r.failures;
-    detail::appendf(out, "FAIL  A is not symmetric: max |A - A^T| / max |A| = %.3g\n", r.asymmetry);
-  } else if (!r.mass_matrix_positive_definite) {
-    ++r.failures;
-    out += "FAIL  A is not positive definite (Cholesky failed)\n";
-  } else {
-    out += "ok    A symmetric positive definite\n";
-  }
-  if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal) {
-    // The solver reads a declared-diagonal A on its diagonal only: anything else would be ignored.
-    Eigen::Matrix<S, N, N> off = at.mass_matrix;
-    off.diagonal().setZero();
-    const S off_max = off.cwiseAbs().maxCoeff();
-    if (off_max != S(0)) {
-      ++r.failures;
-      detail::appendf(out, "FAIL  A is declared diagonal (kMassMatrix) but max |A_ij|, i != j, = %.3g\n", double(off_max));
-    } else {
-      out += "ok    A diagonal, as declared\n";
-    }
-  }
-
-  // Terms along the motion.
-  const S h = options.step * (S(1) + q.cwiseAbs().maxCoeff() + qd.cwiseAbs().maxCoeff() + std::abs(t));
-  auto along = [&](S s) {
-    TermsOf<M> x;
-    const VectorN qs = q + qd * s + qdd * (s * s / S(2));
-    const VectorN qds = qd + qdd * s;
-    evaluate_model(m, qs, qds, t + s, x);
-    return x;
-  };
-  const TermsOf<M> p1 = along(h), m1 = along(-h), p2 = along(2 * h), m2 = along(-2 * h);
-  auto derivative = [&](const VectorP& fp1, const VectorP& fm1, const VectorP& fp2, const VectorP& fm2) -> VectorP {
-    return (S(8) * (fp1 - fm1) - (fp2 - fm2)) / (S(12) * h);
-  };
-  const VectorP de = derivative(p1.constraint_error, m1.constraint_error, p2.constraint_error, m2.constraint_error);
-  const VectorP drate = derivative(p1.constraint_error_rate, m1.constraint_error_rate, p2.constraint_error_rate,
-                                   m2.constraint_error_rate);
-  const VectorP rhs_expected = at.constraint_matrix * qdd - at.constraint_rhs;
-
-  // d e'/dq' by differences in each velocity direction.
-  Eigen::Matrix<S, P, N> d_fd;
-  const S hv = options.step * (S(1) + qd.cwiseAbs().maxCoeff());
-  for (int j = 0; j < N; ++j) {
-    auto rate_at = [&](S s) {
-      TermsOf<M> x;
-      VectorN qds = qd;
-      qds(j) += s;
-      evaluate_model(m, q, qds, t, x);
-      return VectorP(x.constraint_error_rate);
-    };
-    d_fd.col(j) = (S(8) * (rate_at(hv) - rate_at(-hv)) - (rate_at(2 * hv) - rate_at(-2 * hv))) / (S(12) * hv);
-  }
-
-  auto kind = [](int i) {
-    if (i < Layout::kHolonomic) return "holonomic";
-    if (i < Layout::kFirstAcceleration) return "nonholonomic";
-    return "hand-written";
-  };
-  const double tol = double(options.tolerance);
-  for (int i = 0; i < P; ++i) {
+  const detail::Differences<M> d(m, q, qd, qdd, t, options.step);
+  if (!detail::check_finite<M>(d.at, r)) return r;
+  detail::check_mass_matrix<M>(d.at, r);
+  for (int i = 0; i < M::kConstraints; ++i) {
     const bool hand = i >= Layout::kFirstAcceleration;
     const bool has_e = i < Layout::kHolonomic ||
-                       (hand && (at.constraint_error(i) != S(0) || p1.constraint_error(i) != S(0)));
-    const bool has_rate = !hand || at.constraint_error_rate(i) != S(0) || p1.constraint_error_rate(i) != S(0) ||
-                          has_e;
+                       (hand && (d.at.constraint_error(i) != S(0) || d.ahead.constraint_error(i) != S(0)));
+    const bool has_rate = !hand || has_e || d.at.constraint_error_rate(i) != S(0) ||
+                          d.ahead.constraint_error_rate(i) != S(0);
+    const char* kind = i < Layout::kHolonomic ? "holonomic" : hand ? "hand-written" : "nonholonomic";
     char head[96];
-    std::snprintf(head, sizeof head, "row %d (%s)", i, kind(i));
+    std::snprintf(head, sizeof head, "row %d (%s)", i, kind);
     if (!has_rate) {
       ++r.unchecked_rows;
-      out += std::string("skip  ") + head + ": gives neither e nor e', D and g not checked\n";
-      continue;
+      r.text += std::string("skip  ") + head + ": gives neither e nor e', D and g not checked\n";
+    } else if (detail::check_row<M>(i, head, has_e, d, qdd, double(options.tolerance), r)) {
+      r.text += std::string("ok    ") + head + ": D, g" + (has_e ? ", e'" : "") + " agree with differences\n";
+    } else {
+      ++r.failures;
     }
-    bool row_ok = true;
-    if (has_e) {
-      const double scale = 1 + std::abs(double(at.constraint_error_rate(i))) + std::abs(double(de(i)));
-      const double mismatch = std::abs(double(de(i) - at.constraint_error_rate(i))) / scale;
-      r.worst_rate_mismatch = std::max(r.worst_rate_mismatch, mismatch);
-      if (!(mismatch <= tol)) {
-        row_ok = false;
-        detail::appendf(out, ("FAIL  " + std::string(head) + ": de/ds = %.10g but e' = %.10g (relative %.2g)\n").c_str(),
-                        double(de(i)), double(at.constraint_error_rate(i)), mismatch);
-      }
-    }
-    {
-      const double scale = 1 + std::abs(double(rhs_expected(i))) + std::abs(double(drate(i))) +
-                           double(at.constraint_matrix.row(i).cwiseAbs().sum() * qdd.cwiseAbs().maxCoeff());
-      const double mismatch = std::abs(double(drate(i) - rhs_expected(i))) / scale;
-      r.worst_rhs_mismatch = std::max(r.worst_rhs_mismatch, mismatch);
-      if (!(mismatch <= tol)) {
-        row_ok = false;
-        detail::appendf(out,
-                        ("FAIL  " + std::string(head) + ": de'/ds = %.10g but D q'' - g = %.10g (relative %.2g): "
-                                                        "g or D is wrong\n").c_str(),
-                        double(drate(i)), double(rhs_expected(i)), mismatch);
-      }
-    }
-    for (int j = 0; j < N; ++j) {
-      const double scale = 1 + std::abs(double(at.constraint_matrix(i, j)));
-      const double mismatch = std::abs(double(d_fd(i, j) - at.constraint_matrix(i, j))) / scale;
-      r.worst_matrix_mismatch = std::max(r.worst_matrix_mismatch, mismatch);
-      if (!(mismatch <= tol)) {
-        row_ok = false;
-        char what[64];
-        std::snprintf(what, sizeof what, ": de'/dq'_%d = ", j);
-        detail::appendf(out, ("FAIL  " + std::string(head) + what + "%.10g but D = %.10g (relative %.2g)\n").c_str(),
-                        double(d_fd(i, j)), double(at.constraint_matrix(i, j)), mismatch);
-      }
-    }
-    if (row_ok) out += std::string("ok    ") + head + ": D, g" + (has_e ? ", e'" : "") + " agree with differences\n";
-    else ++r.failures;
   }
-  out += r.failures == 0 ? "PASS " : "FAIL ";
-  detail::appendf(out, "%.0f failure(s); worst relative mismatch: e' %.2g, D q'' - g %.2g",
-                  double(r.failures), r.worst_rate_mismatch, r.worst_rhs_mismatch);
-  detail::appendf(out, ", D %.2g\n", r.worst_matrix_mismatch);
+  r.text += r.failures == 0 ? "PASS " : "FAIL ";
+  detail::appendf(r.text, "%.0f failure(s); worst relative mismatch: e' %.2g, D q'' - g %.2g", double(r.failures),
+                  r.worst_rate_mismatch, r.worst_rhs_mismatch);
+  detail::appendf(r.text, ", D %.2g\n", r.worst_matrix_mismatch);
   return r;
 }
 

@@ -121,7 +121,11 @@ void MujocoModel::configure(const EngineSpec& spec, const std::vector<std::strin
 
   m_->opt.timestep = spec.timestep;
   integrator_ = spec.integrator;
-  m_->opt.integrator = spec.integrator == "euler" ? mjINT_EULER : spec.integrator == "implicit" ? mjINT_IMPLICIT : mjINT_RK4;
+  switch (spec.integrator) {
+    case EngineIntegrator::kEuler: m_->opt.integrator = mjINT_EULER; break;
+    case EngineIntegrator::kRk4: m_->opt.integrator = mjINT_RK4; break;
+    case EngineIntegrator::kImplicit: m_->opt.integrator = mjINT_IMPLICIT; break;
+  }
   d_ = mj_makeData(m_);
   if (!d_) fail("MuJoCo cannot allocate its data");
   // The constants the compiler derived from the fields zeroed above (the armature enters
@@ -194,7 +198,7 @@ std::string MujocoModel::step(const double* u) {
 }
 
 std::string MujocoModel::description() const {
-  return "mujoco " + mujoco_version() + ", " + integrator_ + ", timestep " + g(m_->opt.timestep) + " s";
+  return "mujoco " + mujoco_version() + ", " + to_string(integrator_) + ", timestep " + g(m_->opt.timestep) + " s";
 }
 
 std::string mujoco_version() {

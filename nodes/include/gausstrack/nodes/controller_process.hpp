@@ -14,7 +14,7 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
+#include <optional>
 #include <string>
 
 #include "gausstrack/loop_stats_t.hpp"
@@ -32,28 +32,14 @@ struct ControllerProcessOptions {
   bool diagnostics = false;  ///< --diagnostics: publish control_diagnostics_t beside each command
 };
 
-inline constexpr const char* kControllerUsage = "[--diagnostics] [--stats-out FILE]";
+/// Parses the controller's command line (the common options, --diagnostics, --stats-out). Nothing
+/// to go on; else the exit code (0 after --help, 2 after a usage error, printed).
+std::optional<int> parse_controller_options(int argc, char** argv, ControllerProcessOptions& o);
 
-/// Parses the controller's command line; returns 0 to go on, else the exit code (usage printed).
-inline int parse_controller_options(int argc, char** argv, ControllerProcessOptions& o) {
-  std::string error;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (parse_common_option(argc, argv, i, o.process, error)) {
-      if (!error.empty()) return std::fprintf(stderr, "error: %s\n", error.c_str()), 2;
-    } else if (a == "--stats-out" && i + 1 < argc) {
-      o.stats_out = argv[++i];
-    } else if (a == "--diagnostics") {
-      o.diagnostics = true;
-    } else {
-      std::fprintf(stderr, "usage: %s %s %s\n  (--config is --scene's other name)\n", argv[0], kCommonUsage,
-                   kControllerUsage);
-      return 2;
-    }
-  }
-  if (o.process.scene_path.empty()) return std::fprintf(stderr, "error: --config FILE is required\n"), 2;
-  return 0;
-}
+/// Writes the controller's counts and compute-time percentiles to `path` as JSON (--stats-out).
+/// Throws std::runtime_error when it cannot.
+void write_controller_stats(const std::string& path, const std::string& model, const ControllerCounts& counts,
+                            long log_dropped, const LatencyRecorder& compute_ns);
 
 /// Runs the controller for model type M until SIGINT/SIGTERM; returns the exit code. Prints
 /// "gausstrack-controller: ready" once subscribed.
@@ -90,14 +76,11 @@ int run_controller(const ControllerProcessOptions& o, const tracking::TrackingSp
   stats_outbox.publish_message(stats);
   const long log_dropped = close_message_log(log.get(), "gausstrack-controller", p.log_path);
   if (!o.stats_out.empty()) {
-    std::ofstream out(o.stats_out);
-    out << "{\"process\": \"controller\", \"model\": \"" << spec.model << "\", \"commands_published\": " << c.served
-        << ", \"commands_failed\": " << c.failed << ", \"commands_repeated\": " << c.repeated << ", \"runs\": " << c.runs
-        << ", \"messages_rejected\": " << c.rejected << ", \"rejected_malformed\": " << c.malformed
-        << ", \"rejected_dimension\": " << c.wrong_dimension << ", \"rejected_non_finite\": " << c.non_finite
-        << ", \"rejected_stale\": " << c.stale << ", \"log_dropped\": " << log_dropped << ", "
-        << node.compute_ns().json("compute_ns") << "}\n";
-    if (!out) return std::fprintf(stderr, "error: cannot write %s\n", o.stats_out.c_str()), 1;
+    try {
+      write_controller_stats(o.stats_out, spec.model, c, log_dropped, node.compute_ns());
+    } catch (const std::exception& e) {
+      return std::fprintf(stderr, "error: %s\n", e.what()), 1;
+    }
   }
   std::printf("gausstrack-controller: %ld commands published (%ld failed solves), %ld plant runs, %ld messages "
               "rejected, compute p50 %.0f ns, p99 %.0f ns, max %.0f ns\n",
@@ -109,7 +92,7 @@ int run_controller(const ControllerProcessOptions& o, const tracking::TrackingSp
 template <Model M>
 int controller_main(int argc, char** argv, const std::string& name, M defaults = {}) {
   ControllerProcessOptions o;
-  if (const int code = parse_controller_options(argc, argv, o)) return code;
+  if (const std::optional<int> code = parse_controller_options(argc, argv, o)) return *code;
   try {
     const tracking::TrackingSpec spec = tracking::load_tracking(o.process.scene_path, o.process.sets);
     if (spec.model != name)

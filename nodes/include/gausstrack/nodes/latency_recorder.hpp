@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -38,14 +37,6 @@ class LatencyRecorder {
   }
   double max() const { return values_.empty() ? 0 : *std::max_element(values_.begin(), values_.end()); }
 
-  /// `"name": {"p50": .., "p99": .., "p999": .., "max": .., "count": ..}` for a summary file.
-  std::string json(const char* name) const {
-    char buf[256];
-    std::snprintf(buf, sizeof buf,
-                  "\"%s\": {\"p50\": %.6g, \"p99\": %.6g, \"p999\": %.6g, \"max\": %.6g, \"count\": %zu}", name,
-                  quantile(0.5), quantile(0.99), quantile(0.999), max(), count());
-    return buf;
-  }
 
  private:
   std::vector<double> values_;

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json_fwd.hpp>
 #include <poll.h>
 #include <sys/prctl.h>
 
@@ -279,20 +280,9 @@ class PlantNode {
   }
 
   /// The loop's figures as JSON object members (for the run's summary).
-  std::string summary_members(long log_dropped) const {
-    const auto n = [](long v) { return std::to_string(v); };
-    return "\"mode\": \"" + std::string(o_.lockstep ? "lockstep" : "realtime") + "\", \"control_rate_hz\": " +
-           std::to_string(o_.rate_hz) + ", \"run_id\": " + std::to_string(run_id_) +
-           ", \"states_published\": " + n(counts_.states_published) +
-           ", \"commands_applied\": " + n(counts_.commands_applied) +
-           ", \"commands_missing\": " + n(counts_.commands_missing) +
-           ", \"commands_late\": " + n(counts_.commands_late) + ", \"commands_failed\": " + n(counts_.commands_failed) +
-           ", \"deadline_misses\": " + n(scheduler_.misses()) + ", \"messages_rejected\": " + n(counts_.rejected) +
-           ", \"commands_of_other_runs\": " + n(counts_.other_run) + ", \"states_resent\": " + n(counts_.states_resent) + ", \"watchdog_trips\": " + n(watchdog_.trips()) +
-           ", \"log_dropped\": " + n(log_dropped) + ",\n  " + round_trip_us_.json("round_trip_us") + ",\n  " +
-           compute_ns_.json("compute_ns") + ",\n  " +
-           (o_.lockstep ? std::string("\"wake_late_us\": null") : scheduler_.wake_late_us().json("wake_late_us"));
-  }
+  /// Adds the loop's members to a run's summary (summary.json): mode, rate, run id, the counts,
+  /// and the round-trip, compute and wake-up percentiles.
+  void add_to_summary(nlohmann::ordered_json& summary, long log_dropped) const;
 
  private:
   static std::int64_t random_run_id() {

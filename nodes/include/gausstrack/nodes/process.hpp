@@ -1,5 +1,6 @@
 // What the LCM processes (gausstrack-plant, gausstrack-controller) share: their common command-line
-// options, the optional real-time setup (SCHED_FIFO, CPU pinning, mlockall) and clocks.
+// options (parsed in src/cli.hpp), the optional real-time setup (SCHED_FIFO, CPU pinning,
+// mlockall), the stop request and clocks.
 #pragma once
 
 #include <sched.h>
@@ -15,16 +16,9 @@
 #include <string>
 #include <vector>
 
+#include "gausstrack/tracking/stop_request.hpp"
+
 namespace gausstrack::nodes {
-
-inline volatile std::sig_atomic_t g_stop_requested = 0;
-
-/// SIGINT and SIGTERM ask the loop to stop; the process then writes its statistics and exits.
-inline void stop_on_signals() {
-  auto handler = [](int) { g_stop_requested = 1; };
-  std::signal(SIGINT, handler);
-  std::signal(SIGTERM, handler);
-}
 
 /// CLOCK_MONOTONIC [ns].
 inline std::int64_t monotonic_ns() {
@@ -58,47 +52,6 @@ struct ProcessOptions {
   std::string log_path;       ///< record every message this process publishes (MessageLog)
   bool log_wait = false;      ///< when the log's buffer is full, wait rather than drop (lock-step)
 };
-
-inline constexpr const char* kCommonUsage =
-    "--scene S [--set key=value ...] [--lcm-url URL] [--state-channel C] [--command-channel C] "
-    "[--stats-channel C] [--diagnostics-channel C] [--rt-priority P] [--cpu K] [--lock-memory] [--log FILE [--log-wait]]";
-
-/// Consumes argv[i] (and its value) if it is a common option. Returns false if it is not one;
-/// a common option with a missing or malformed value sets `error`.
-inline bool parse_common_option(int argc, char** argv, int& i, ProcessOptions& o, std::string& error) {
-  const std::string a = argv[i];
-  if (a == "--lock-memory") return o.lock_memory = true;
-  if (a == "--log-wait") return o.log_wait = true;
-  const bool takes_value = a == "--scene" || a == "--config" || a == "--diagnostics-channel" || a == "--set" || a == "--lcm-url" || a == "--state-channel" ||
-                           a == "--command-channel" || a == "--stats-channel" || a == "--rt-priority" ||
-                           a == "--cpu" || a == "--log";
-  if (!takes_value) return false;
-  if (i + 1 >= argc) {
-    error = a + " needs a value";
-    return true;
-  }
-  const std::string v = argv[++i];
-  auto integer = [&](int lo, int hi, int& out) {
-    char* end = nullptr;
-    errno = 0;
-    const long x = std::strtol(v.c_str(), &end, 10);
-    if (errno != 0 || end == v.c_str() || *end != '\0' || x < lo || x > hi)
-      error = a + " takes an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'";
-    else
-      out = static_cast<int>(x);
-  };
-  if (a == "--scene" || a == "--config") o.scene_path = v;
-  else if (a == "--diagnostics-channel") o.diagnostics_channel = v;
-  else if (a == "--set") o.sets.push_back(v);
-  else if (a == "--lcm-url") o.lcm_url = v;
-  else if (a == "--state-channel") o.state_channel = v;
-  else if (a == "--command-channel") o.command_channel = v;
-  else if (a == "--stats-channel") o.stats_channel = v;
-  else if (a == "--log") o.log_path = v;
-  else if (a == "--rt-priority") integer(1, 99, o.rt_priority);
-  else integer(0, 1023, o.cpu);
-  return true;
-}
 
 /// Applies the real-time options asked for to the calling thread and to the threads it creates
 /// afterwards (they inherit the policy and the CPU). The processes call it after opening their

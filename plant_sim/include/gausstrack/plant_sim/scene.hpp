@@ -37,7 +37,11 @@ enum class EffectKind : std::uint8_t {
   kSensorNoise,         ///< Gaussian noise on the state the controller measures (sampled control)
   kCount
 };
-const char* to_string(EffectKind kind) noexcept;
+const char* to_string(EffectKind kind) noexcept;  ///< the scene's name: "gravity", "cubic_spring", ...
+inline constexpr EffectKind kEffectKinds[] = {EffectKind::kGravity,   EffectKind::kSpring,
+                                              EffectKind::kCubicSpring, EffectKind::kDamper,
+                                              EffectKind::kDisturbance, EffectKind::kActuatorSaturation,
+                                              EffectKind::kSensorNoise};
 
 struct EffectSpec {
   EffectKind kind = EffectKind::kGravity;
@@ -54,6 +58,8 @@ enum class ConstraintKind : std::uint8_t {
   kPendulumLength,  ///< x^2 + y^2 = L^2 (1 - mu sin(x^2)), eq. (34)
   kNonholonomic,    ///< y' = z x', eq. (36)
 };
+const char* to_string(ConstraintKind kind) noexcept;  ///< "pendulum_length", "nonholonomic"
+inline constexpr ConstraintKind kConstraintKinds[] = {ConstraintKind::kPendulumLength, ConstraintKind::kNonholonomic};
 
 struct ConstraintSpec {
   ConstraintKind kind = ConstraintKind::kPendulumLength;
@@ -62,13 +68,19 @@ struct ConstraintSpec {
   double mu = 0.0;
 };
 
+/// The engine's own integrator (plant.integrator).
+enum class EngineIntegrator : std::uint8_t { kEuler, kRk4, kImplicit };
+const char* to_string(EngineIntegrator integrator) noexcept;  ///< "euler", "rk4", "implicit"
+inline constexpr EngineIntegrator kEngineIntegrators[] = {EngineIntegrator::kEuler, EngineIntegrator::kRk4,
+                                                          EngineIntegrator::kImplicit};
+
 /// A plant stepped by a physics engine instead of plant_sim's own integrator (plant.engine).
 struct EngineSpec {
   std::string name;        ///< "mujoco"; empty: plant_sim's own (point masses or a model)
   std::string model_path;  ///< plant.model: the engine's model file (MJCF), resolved against the scene's directory
   std::string where;       ///< where plant.engine was written
   double timestep = 0;     ///< the engine's fixed step [s]
-  std::string integrator = "rk4";     ///< euler | rk4 | implicit
+  EngineIntegrator integrator = EngineIntegrator::kRk4;
   std::vector<std::string> effects;   ///< the engine's effects switched on; all others are off
 };
 
@@ -77,10 +89,15 @@ inline constexpr const char* kMujocoEffects[] = {"gravity", "damping", "springs"
                                                  "frictionloss", "limits", "contact", "equality"};
 
 enum class ControlMode : std::uint8_t { kContinuous, kSampled };
+const char* to_string(ControlMode mode) noexcept;  ///< "continuous", "sampled"
+inline constexpr ControlMode kControlModes[] = {ControlMode::kContinuous, ControlMode::kSampled};
+
 /// The plant's integrator: fixed-step RK4; Dormand-Prince 5(4) with dense output; Fehlberg 7(8)
 /// (steps end on sample times: odeint has no dense output for it); Bulirsch-Stoer with dense
 /// output (high accuracy, offline: it allocates as it steps).
 enum class Method : std::uint8_t { kRk4, kDopri5, kRkf78, kBulirschStoer };
+const char* to_string(Method method) noexcept;  ///< "rk4", "dopri5", "rkf78", "bulirsch_stoer"
+inline constexpr Method kMethods[] = {Method::kRk4, Method::kDopri5, Method::kRkf78, Method::kBulirschStoer};
 
 struct Scene {
   std::string file;

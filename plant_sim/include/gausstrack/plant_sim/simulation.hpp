@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <nlohmann/json_fwd.hpp>
 #include <span>
 #include <string>
 #include <vector>
@@ -112,9 +113,13 @@ std::vector<double> plant_acceleration(const Scene& scene, const std::vector<dou
 
 /// `t,q1..qN,qd1..qdN,u1..uN,tracking_error,constraint_residual`, one row per sample.
 void write_trajectory_csv(const Scene& scene, const RunResult& result, const std::string& path);
-/// The run's summary; `extra_members` (JSON object members, comma-separated, without braces) are
-/// added at the top level, e.g. a process's loop statistics.
-void write_summary_json(const Scene& scene, const RunResult& result, const std::string& path,
-                        const std::string& extra_members = {});
+/// The run's summary (summary.json's members): whether it completed or why not, tracking and
+/// constraint errors, work counts, effects evaluated, engine, wall time. A process adds its own
+/// members (e.g. its loop statistics) before writing it.
+nlohmann::ordered_json summary_json(const Scene& scene, const RunResult& result);
+/// Writes a JSON document, indented, to path. Throws std::runtime_error when it cannot.
+void write_json(const nlohmann::ordered_json& document, const std::string& path);
+/// write_json(summary_json(scene, result), path).
+void write_summary_json(const Scene& scene, const RunResult& result, const std::string& path);
 
 }  // namespace gausstrack::plant_sim

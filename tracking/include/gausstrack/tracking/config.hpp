@@ -51,6 +51,23 @@ struct TrackingSpec {
   }
 };
 
+/// One name table per enum: its to_string. The value among `values` whose name is `name`, or
+/// nothing.
+template <class E, std::size_t K>
+std::optional<E> from_name(const E (&values)[K], std::string_view name) {
+  for (E v : values)
+    if (name == to_string(v)) return v;
+  return std::nullopt;
+}
+
+/// "a, b, c": the names of `values`, for messages.
+template <class E, std::size_t K>
+std::string names_of(const E (&values)[K]) {
+  std::string names;
+  for (E v : values) names += (names.empty() ? "" : ", ") + std::string(to_string(v));
+  return names;
+}
+
 /// Every strategy, in the order the names are listed in messages.
 inline constexpr InverseStrategy kStrategies[] = {
     InverseStrategy::kCholeskyWithFallback, InverseStrategy::kSvd,

@@ -127,6 +127,19 @@ class Reader {
     return has(key) ? text(key) : fallback;
   }
 
+  /// The value among `values` named by this key (by the enum's to_string); an unknown name fails
+  /// with "unknown <what> 'name' (known: ...)".
+  template <class E, std::size_t K>
+  E choice(const char* key, const E (&values)[K], const char* what) const {
+    const std::string name = text(key);
+    if (const std::optional<E> v = from_name(values, name)) return *v;
+    child(key).fail("unknown " + std::string(what) + " '" + name + "' (known: " + names_of(values) + ")");
+  }
+  template <class E, std::size_t K>
+  E choice(const char* key, const E (&values)[K], const char* what, E fallback) const {
+    return has(key) ? choice(key, values, what) : fallback;
+  }
+
   double as_number() const {
     if (!node_.IsScalar()) fail("must be a number");
     double v = 0;

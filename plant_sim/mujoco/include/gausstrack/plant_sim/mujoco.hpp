@@ -55,7 +55,7 @@ class MujocoModel {
   mjModel_* m_ = nullptr;
   mjData_* d_ = nullptr;
   std::vector<int> qpos_index_, dof_index_;
-  std::string integrator_;
+  EngineIntegrator integrator_ = EngineIntegrator::kRk4;
   std::string failure_;
 };
 

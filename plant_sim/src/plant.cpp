@@ -1,0 +1,224 @@
+#include "plant.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace gausstrack::plant_sim::detail {
+
+const ModelFactory& find_model(const RunOptions& o, const std::string& name, const std::string& where) {
+  for (const ModelFactory& f : o.models)
+    if (f.name == name) return f;
+  if (const ModelFactory* f = find_builtin_model(name)) return *f;
+  std::string given;
+  for (const ModelFactory& f : o.models) given += (given.empty() ? "" : ", ") + f.name;
+  throw SceneError(where + ": unknown model '" + name + "' (compiled in: " + builtin_model_names() +
+                   (given.empty() ? std::string() : "; given to this run: " + given) + ")");
+}
+
+Plant::Plant(const Scene& s, const RunOptions& o) : n_(s.dof()) {
+  if (!s.plant_model.empty()) {
+    model_ = find_model(o, s.plant_model, s.plant_model_where).plant(s.plant_parameters);
+    if (model_->dof() != n_)
+      throw SceneError(s.plant_model_where + ": model '" + s.plant_model + "' has " +
+                       std::to_string(model_->dof()) + " coordinates, the plant lists " + std::to_string(n_));
+  } else if (!s.masses.empty()) {
+    mass_ = Eigen::Map<const V>(s.masses.data(), n_);
+  }  // else an engine's plant: its physics are the engine's
+  for (const EffectSpec& e : s.effects) {
+    switch (e.kind) {
+      case EffectKind::kActuatorSaturation: saturation_ = e; break;
+      case EffectKind::kSensorNoise:
+        noise_ = e;
+        rng_.seed(e.seed);
+        break;
+      default: forces_.push_back(e);
+    }
+  }
+  constraints_ = s.constraints;
+  A_.setZero(n_, n_);
+  f_.setZero(n_);
+  Q_.setZero(n_);
+}
+
+void Plant::applied_force(const V& q, const V& qd, double t, RunSummary& stats, V& Q) const {
+  Q.setZero(n_);
+  for (const EffectSpec& e : forces_) {
+    ++stats.effect_evaluations[static_cast<std::size_t>(e.kind)];
+    const double xb = e.b == kGround ? 0.0 : q(e.b), vb = e.b == kGround ? 0.0 : qd(e.b);
+    const double d = q(e.a) - xb, dd = qd(e.a) - vb;
+    double force_on_a = 0;  // force on coordinate a; b receives the opposite
+    switch (e.kind) {
+      case EffectKind::kGravity: Q(e.a) += mass_(e.a) * e.value; continue;
+      case EffectKind::kDisturbance: Q(e.a) += e.value * std::sin(e.frequency * t + e.phase); continue;
+      case EffectKind::kSpring: force_on_a = -e.value * d; break;
+      case EffectKind::kCubicSpring: force_on_a = -e.value * d * d * d; break;
+      case EffectKind::kDamper: force_on_a = -e.value * dd; break;
+      default: continue;
+    }
+    Q(e.a) += force_on_a;
+    if (e.b != kGround) Q(e.b) -= force_on_a;
+  }
+}
+
+void Plant::saturate(V& u, RunSummary& stats) const {
+  if (!saturation_) return;
+  ++stats.effect_evaluations[static_cast<std::size_t>(EffectKind::kActuatorSaturation)];
+  u = u.cwiseMax(-saturation_->value).cwiseMin(saturation_->value);
+}
+
+void Plant::measure(V& q, V& qd, RunSummary& stats) {
+  if (!noise_) return;
+  ++stats.effect_evaluations[static_cast<std::size_t>(EffectKind::kSensorNoise)];
+  std::normal_distribution<double> nd(0.0, noise_->value);
+  for (int i = 0; i < n_; ++i) {
+    q(i) += nd(rng_);
+    qd(i) += nd(rng_);
+  }
+}
+
+void Plant::constraint_row(const ConstraintSpec& c, const Eigen::Ref<const V>& q, const Eigen::Ref<const V>& qd,
+                    Eigen::RowVectorXd& D, double& g) const {
+  D.setZero(n_);
+  const auto& k = c.coordinates;
+  if (c.kind == ConstraintKind::kPendulumLength) {
+    // phi = x^2 + y^2 - L^2 + mu L^2 sin(x^2); D = grad phi; g = -q'^T Hess(phi) q'.
+    const double x = q(k[0]), y = q(k[1]), xd = qd(k[0]), yd = qd(k[1]);
+    const double l2mu = c.length * c.length * c.mu;
+    D(k[0]) = 2 * x + 2 * l2mu * x * std::cos(x * x);
+    D(k[1]) = 2 * y;
+    const double hxx = 2 + 2 * l2mu * (std::cos(x * x) - 2 * x * x * std::sin(x * x));
+    g = -(hxx * xd * xd + 2 * yd * yd);
+  } else {
+    // y' - z x' = 0 differentiated: y'' - z x'' = z' x'.
+    D(k[0]) = -q(k[2]);
+    D(k[1]) = 1;
+    g = qd(k[2]) * qd(k[0]);
+  }
+}
+
+void Plant::acceleration(const V& q, const V& qd, double t, const V& u, RunSummary& stats, V& qdd) {
+  V& rhs = force_;
+  applied_force(q, qd, t, stats, rhs);
+  rhs += u;
+  if (model_) {
+    model_->evaluate(q, qd, t, A_, f_, Q_);
+    rhs += Q_ - f_;
+  }
+  const int p = static_cast<int>(constraints_.size());
+  if (p == 0) {
+    if (!model_) {
+      qdd = rhs.cwiseQuotient(mass_);
+      return;
+    }
+    llt_.compute(A_);
+    if (llt_.info() != Eigen::Success) qdd.setConstant(n_, std::numeric_limits<double>::quiet_NaN());
+    else qdd = llt_.solve(rhs);
+    return;
+  }
+  kkt_.setZero(n_ + p, n_ + p);
+  if (model_) kkt_.topLeftCorner(n_, n_) = A_;
+  else kkt_.topLeftCorner(n_, n_).diagonal() = mass_;
+  V& b = kkt_rhs_;
+  b.resize(n_ + p);
+  b.head(n_) = rhs;
+  for (int k = 0; k < p; ++k) {
+    double g = 0;
+    constraint_row(constraints_[static_cast<std::size_t>(k)], q, qd, row_, g);
+    kkt_.block(n_ + k, 0, 1, n_) = row_;
+    kkt_.block(0, n_ + k, n_, 1) = row_.transpose();
+    b(n_ + k) = g;
+  }
+  // Rank-revealing, so that a configuration where the rows lose rank still gives the
+  // least-squares multipliers rather than a division by zero.
+  kkt_solver_.compute(kkt_);
+  kkt_solution_ = kkt_solver_.solve(b);
+  qdd = kkt_solution_.head(n_);
+}
+
+bool Plant::project(Eigen::VectorXd& x, double t, RunSummary& stats) {
+  if (constraints_.empty() || !x.allFinite()) return x.allFinite();
+  ++stats.projections;
+  Eigen::Ref<V> q = x.head(n_), qd = x.tail(n_);
+  const int p = static_cast<int>(constraints_.size());
+  M D(p, n_);
+  V r(p);
+  auto rows = [&](bool holonomic_only) {
+    double g = 0;
+    for (int k = 0; k < p; ++k) {
+      const ConstraintSpec& c = constraints_[static_cast<std::size_t>(k)];
+      constraint_row(c, q, qd, row_, g);
+      const bool holonomic = c.kind == ConstraintKind::kPendulumLength;
+      D.row(k) = holonomic_only && !holonomic ? Eigen::RowVectorXd::Zero(n_) : row_;
+      r(k) = holonomic_only ? (holonomic ? position_residual(c, q) : 0.0) : row_.dot(qd);
+    }
+  };
+  // W = A^-1 at the current q.
+  M W;
+  if (model_) {
+    model_->evaluate(q, qd, t, A_, f_, Q_);
+    llt_.compute(A_);
+    if (llt_.info() != Eigen::Success) {
+      x.setConstant(std::numeric_limits<double>::quiet_NaN());  // the run stops with its reason
+      return false;
+    }
+    W = llt_.solve(M::Identity(n_, n_));
+  } else {
+    W = mass_.cwiseInverse().asDiagonal();
+  }
+  auto correction = [&]() -> V {
+    const M DWDt = D * W * D.transpose();
+    return W * D.transpose() * DWDt.completeOrthogonalDecomposition().solve(r);
+  };
+  for (int it = 0; it < 3; ++it) {
+    rows(true);
+    if (r.cwiseAbs().maxCoeff() == 0) break;
+    q -= correction();
+  }
+  rows(false);
+  qd -= correction();
+  return x.allFinite();
+}
+
+double Plant::position_residual(const ConstraintSpec& c, const Eigen::Ref<const V>& q) {
+  const auto& k = c.coordinates;
+  const double x = q(k[0]), y = q(k[1]), L = c.length;
+  return x * x + y * y - L * L * (1 - c.mu * std::sin(x * x));
+}
+
+double Plant::constraint_residual(const V& q, const V& qd) const {
+  double worst = 0;
+  for (const ConstraintSpec& c : constraints_) {
+    const auto& k = c.coordinates;
+    const double r = c.kind == ConstraintKind::kPendulumLength ? position_residual(c, q)
+                                                               : qd(k[1]) - q(k[2]) * qd(k[0]);
+    if (std::abs(r) > std::abs(worst)) worst = r;
+  }
+  return worst;
+}
+
+Control::Control(const Scene& s, const RunOptions& o) {
+  if (!s.tracking.enabled) return;
+  const ModelFactory& model = find_model(o, s.tracking.model, s.tracking.where);
+  if (model.dof != s.dof())
+    throw SceneError(s.tracking.where + ": model '" + s.tracking.model + "' has " + std::to_string(model.dof) +
+                     " coordinates, the plant has " + std::to_string(s.dof()));
+  if (o.sampled_control) error_ = model.tracking_error(s.tracking);
+  else law_ = model.control_law(s.tracking);
+}
+
+void Control::force(const V& q, const V& qd, double t, RunSummary& stats, V& u) {
+  u.setZero(q.size());
+  if (!law_) return;
+  ++stats.control_evaluations;
+  if (failed(law_->compute(q.data(), qd.data(), t, u.data()))) {
+    ++stats.control_failures;
+    u.setZero();
+  }
+}
+
+double Control::tracking_error(const V& q, const V& qd, double t) const {
+  if (error_) return error_(q.data(), qd.data(), t);
+  return law_ ? law_->tracking_error(q.data(), qd.data(), t) : 0.0;
+}
+
+}  // namespace gausstrack::plant_sim::detail
