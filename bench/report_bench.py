@@ -84,173 +84,200 @@ def update_doc(page, body):
     return 0
 
 
-def main(d, page=None):
-    out = ["# Benchmarks", "", "Written by `scripts/bench`; every figure in a table comes from one run on the machine "
-           "that ran it, baselines included.", ""]
+def control_law(d):
+    """The law per system and strategy beside its baselines, the targets, the solve taken apart, growth."""
     doc = load(d, "controller_bench.json")
-    if doc:
-        ctx = doc["context"]
-        out += [f"Machine: {ctx.get('num_cpus')} CPUs at {ctx.get('mhz_per_cpu')} MHz; built for the host CPU: "
-                f"{ctx.get('build_for_host_cpu', 'no')}. The timer's own cost per timed call (two clock reads) is the "
-                "`timer_overhead` row.", "",
-                "Law rows: `cholesky` is the default (the mass matrix as the model declares it; the factorization "
-                "kept while A and D are unchanged bit for bit, as they are for the Duffing systems); "
-                "`cholesky_refactor` factors on every call, as a configuration-dependent A and D need; "
-                "`cholesky_dense_refactor` also reads a declared-diagonal A as dense (the general case). "
-                "`plain_fixed` is the same mathematics on the law's own kernels with no checks and no diagnostics.", ""]
-        b = benchmarks(doc)
-        models = []
-        for name in b:
-            parts = name.split("/")
-            if len(parts) == 3 and parts[1] not in models:
-                models.append(parts[1])
-        out += ["## Control law: one full evaluation (model terms + eq. 32)", "",
-                "Time is Google Benchmark's median over repetitions; p50/p99/p99.9/max come from calls timed one by "
-                "one (they include the timer's own cost); allocations are per call.", ""]
-        rows = []
-        for m in models:
-            for kind, names in (("law", STRATEGIES), ("baseline", BASELINES)):
-                for s in names:
-                    key = f"{kind}/{m}/{s}"
-                    if key in b:
-                        t, c = b[key]
-                        rows.append([m, f"{kind}: {s}", ns(t), ns(c.get("p50_ns", 0)), ns(c.get("p99_ns", 0)),
-                                     ns(c.get("p999_ns", 0)), ns(c.get("max_ns", 0)),
-                                     f"{c.get('allocs_per_call', 0):.0f}"])
-        if "baseline/timer_overhead" in b:
-            t, c = b["baseline/timer_overhead"]
-            rows.append(["-", "timer overhead", ns(t), ns(c["p50_ns"]), ns(c["p99_ns"]), ns(c["p999_ns"]),
-                         ns(c["max_ns"]), "0"])
-        out += ["| system | code | time | p50 | p99 | p99.9 | max | allocs |", "|---|---|---|---|---|---|---|---|"]
-        out += ["| " + " | ".join(r) + " |" for r in rows]
+    if not doc:
+        return []
+    ctx = doc["context"]
+    out = [f"Machine: {ctx.get('num_cpus')} CPUs at {ctx.get('mhz_per_cpu')} MHz; built for the host CPU: "
+           f"{ctx.get('build_for_host_cpu', 'no')}. The timer's own cost per timed call (two clock reads) is the "
+           "`timer_overhead` row.", "",
+           "Law rows: `cholesky` is the default (the mass matrix as the model declares it; the factorization "
+           "kept while A and D are unchanged bit for bit, as they are for the Duffing systems); "
+           "`cholesky_refactor` factors on every call, as a configuration-dependent A and D need; "
+           "`cholesky_dense_refactor` also reads a declared-diagonal A as dense (the general case). "
+           "`plain_fixed` is the same mathematics on the law's own kernels with no checks and no diagnostics.", ""]
+    b = benchmarks(doc)
+    models = []
+    for name in b:
+        parts = name.split("/")
+        if len(parts) == 3 and parts[1] not in models:
+            models.append(parts[1])
+    return out + law_table(b, models) + targets(b, models) + solve_split(b, models) + phases(b, models) + growth(b, models)
 
-        def t(key):
-            return b[key][0] if key in b else math.nan
 
-        out += ["", "### Targets (ratios from this run)", "",
-                "| target | system | measured | met |", "|---|---|---|---|"]
+def timed(b):
+    return lambda key: b[key][0] if key in b else math.nan
 
-        def target(label, m, value, ok):
-            out.append(f"| {label} | {m} | {value:.2f}x | {'yes' if ok else '**no**'} |")
 
-        duffing = t("law/duffing_2x1/cholesky") / t("baseline/duffing_2x1/closed_form")
-        target("Duffing law <= 2x its closed form (stretch 1.5x)", "duffing_2x1", duffing, duffing <= 2)
-        for m in models:
-            if math.isnan(t(f"law/{m}/cholesky")):
-                continue  # a system with no law rows in this run (e.g. timed by the natural-form benchmarks only)
-            default, refactor = t(f"law/{m}/cholesky"), t(f"law/{m}/cholesky_refactor")
-            general = t(f"law/{m}/cholesky_dense_refactor")
-            declared = not math.isnan(general)
-            if not declared:
-                general = refactor
-            kkt = t(f"baseline/{m}/dynamic_kkt")
-            lit = t(f"baseline/{m}/literal_fixed") / default
-            dyn = t(f"baseline/{m}/dynamic_user") / default
-            target("general (dense A, factored every call) >= 2x faster than dynamic KKT LU", m,
-                   kkt / general, kkt / general >= 2)
-            if declared:
-                target("declared diagonal A (factored every call) >= 4x faster than dynamic KKT LU", m,
-                       kkt / refactor, kkt / refactor >= 4)
-                target("constant A and D, factorization kept (default) >= 4x faster than dynamic KKT LU", m,
-                       kkt / default, kkt / default >= 4)
-            plain = general / t(f"baseline/{m}/plain_fixed")
-            target("checks and diagnostics <= 1.2x the same solve without them", m, plain, plain <= 1.2)
-            target("default >= 8x faster than literal fixed-size SVD", m, lit, lit >= 8)
-            target("default >= 15x faster than dynamic-size user code", m, dyn, dyn >= 15)
-            for s_ in ("svd", "cod"):
-                r = t(f"law/{m}/{s_}") / default
-                target(f"rank-revealing ({s_.upper()}) <= 3x default", m, r, r <= 3)
+def law_table(b, models):
+    out = ["## Control law: one full evaluation (model terms + eq. 32)", "",
+           "Time is Google Benchmark's median over repetitions; p50/p99/p99.9/max come from calls timed one by "
+           "one (they include the timer's own cost); allocations are per call.", ""]
+    rows = []
+    for m in models:
+        for kind, names in (("law", STRATEGIES), ("baseline", BASELINES)):
+            for s in names:
+                key = f"{kind}/{m}/{s}"
+                if key in b:
+                    t, c = b[key]
+                    rows.append([m, f"{kind}: {s}", ns(t), ns(c.get("p50_ns", 0)), ns(c.get("p99_ns", 0)),
+                                 ns(c.get("p999_ns", 0)), ns(c.get("max_ns", 0)), f"{c.get('allocs_per_call', 0):.0f}"])
+    if "baseline/timer_overhead" in b:
+        t, c = b["baseline/timer_overhead"]
+        rows.append(["-", "timer overhead", ns(t), ns(c["p50_ns"]), ns(c["p99_ns"]), ns(c["p999_ns"]),
+                     ns(c["max_ns"]), "0"])
+    out += ["| system | code | time | p50 | p99 | p99.9 | max | allocs |", "|---|---|---|---|---|---|---|---|"]
+    return out + ["| " + " | ".join(r) + " |" for r in rows]
 
-        out += ["", "### Where the time goes: the model's terms and the solve", "",
-                "Every row evaluates the model's terms once; `model_terms` times that alone. The solve is a row's "
-                "time minus it (same run; a difference of two medians, so small ones are noisy); the baselines' "
-                "solve includes copying the terms into their own matrices. The last two columns are the KKT "
-                "baseline's solve over the law's.", "",
-                "| system | model terms | solve: default | solve: general | solve: plain_fixed | solve: dynamic KKT "
-                "| KKT / default (solve) | KKT / general (solve) |", "|---|---|---|---|---|---|---|---|"]
-        for m in models:
-            terms = t(f"baseline/{m}/model_terms")
-            if math.isnan(terms):
-                continue
-            general = t(f"law/{m}/cholesky_dense_refactor")
-            if math.isnan(general):
-                general = t(f"law/{m}/cholesky_refactor")
-            solve = [t(f"law/{m}/cholesky") - terms, general - terms, t(f"baseline/{m}/plain_fixed") - terms,
-                     t(f"baseline/{m}/dynamic_kkt") - terms]
-            def over(a, b):  # a difference of two medians can be at or below zero: then no ratio
-                return f"{a / b:.2f}x" if a > 0 and b > 0 else "n/a"
 
-            out.append(f"| {m} | {ns(terms)} | " + " | ".join(ns(v) for v in solve)
-                       + f" | {over(solve[3], solve[0])} | {over(solve[3], solve[1])} |")
+def targets(b, models):
+    t = timed(b)
+    out = ["", "### Targets (ratios from this run)", "", "| target | system | measured | met |", "|---|---|---|---|"]
 
-        phases = ("mass_cholesky", "constraint_solve", "gram", "gram_cholesky", "gram_inverse")
-        phased = [m for m in models if f"phase/{m}/kkt_lu" in b]
-        if phased:
-            out += ["", "### The general case's solve taken apart", "",
-                    "Each kernel of the refactoring path alone (`phase/*`, the law's own kernels on the benchmark "
-                    "states' terms, each input copied in first): Cholesky of A (N^3/3 flops), B^T = L^-1 D^T "
-                    "(N^2 P), the Gram matrix B B^T (2 N P^2, the full product), its Cholesky (P^3/3) and the "
-                    "inverse factor the condition bound needs (P^3/3); with P = 1 the law takes a scalar path "
-                    "instead of the last two (shown as -). `rest` is the general row's solve (row less "
-                    "`model_terms`) less the kernels it runs: the right-hand sides and their triangular solves, the "
-                    "products, the checks and the residual. Beside it the KKT baseline's LU alone as a user writes "
-                    "it (`kkt_lu`: a `PartialPivLU<MatrixXd>` constructed on the assembled matrix, so its 3 "
-                    "allocations, the matrix's copy and Eigen's norm pass included; 2 (N+P)^3/3 flops) and the KKT "
-                    "row's solve (row less `model_terms`).", "",
-                    "| system | " + " | ".join(phases) + " | rest | general solve | kkt_lu | KKT solve |",
-                    "|---|" + "---|" * (len(phases) + 4)]
-            for m in phased:
-                general = t(f"law/{m}/cholesky_dense_refactor")
-                if math.isnan(general):
-                    general = t(f"law/{m}/cholesky_refactor")
-                terms = t(f"baseline/{m}/model_terms")
-                scalar = m.endswith("x1")  # P = 1: no Gram Cholesky nor inverse factor in the law
-                parts = [math.nan if scalar and p_ in ("gram_cholesky", "gram_inverse") else t(f"phase/{m}/{p_}")
-                         for p_ in phases]
-                rest = general - terms - sum(v for v in parts if not math.isnan(v))
-                out.append(f"| {m} | " + " | ".join("-" if math.isnan(v) else ns(v) for v in parts)
-                           + f" | {ns(rest)} | {ns(general - terms)} | "
-                           f"{ns(t(f'phase/{m}/kkt_lu'))} | {ns(t(f'baseline/{m}/dynamic_kkt') - terms)} |")
+    def target(label, m, value, ok):
+        out.append(f"| {label} | {m} | {value:.2f}x | {'yes' if ok else '**no**'} |")
 
-        chains = sorted(((int(m.split("_")[1].split("x")[0]), m) for m in models if m.startswith("chain_")))
-        if len(chains) >= 3:
-            out += ["", "### Growth with N (Duffing chains, P = N/2)", "",
-                    "Least-squares slope of log(time) against log(N), N = "
-                    + ", ".join(str(n) for n, _ in chains) + ":", ""]
-            for code in [f"law/{{}}/{s}" for s in STRATEGIES] + [f"baseline/{{}}/{s}" for s in BASELINES[:3]]:
-                xs = [math.log(n) for n, m in chains if code.format(m) in b]
-                ys = [math.log(t(code.format(m))) for n, m in chains if code.format(m) in b]
-                if len(xs) >= 3:
-                    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
-                    slope = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
-                    out.append(f"- `{code.format('chain')}`: time ~ N^{slope:.2f}")
-        out.append("")
+    duffing = t("law/duffing_2x1/cholesky") / t("baseline/duffing_2x1/closed_form")
+    target("Duffing law <= 2x its closed form (stretch 1.5x)", "duffing_2x1", duffing, duffing <= 2)
+    for m in models:
+        if math.isnan(t(f"law/{m}/cholesky")):
+            continue  # a system with no law rows in this run (e.g. timed by the natural-form benchmarks only)
+        default, refactor = t(f"law/{m}/cholesky"), t(f"law/{m}/cholesky_refactor")
+        general = t(f"law/{m}/cholesky_dense_refactor")
+        declared = not math.isnan(general)
+        if not declared:
+            general = refactor
+        kkt = t(f"baseline/{m}/dynamic_kkt")
+        lit = t(f"baseline/{m}/literal_fixed") / default
+        dyn = t(f"baseline/{m}/dynamic_user") / default
+        target("general (dense A, factored every call) >= 2x faster than dynamic KKT LU", m, kkt / general,
+               kkt / general >= 2)
+        if declared:
+            target("declared diagonal A (factored every call) >= 4x faster than dynamic KKT LU", m,
+                   kkt / refactor, kkt / refactor >= 4)
+            target("constant A and D, factorization kept (default) >= 4x faster than dynamic KKT LU", m,
+                   kkt / default, kkt / default >= 4)
+        plain = general / t(f"baseline/{m}/plain_fixed")
+        target("checks and diagnostics <= 1.2x the same solve without them", m, plain, plain <= 1.2)
+        target("default >= 8x faster than literal fixed-size SVD", m, lit, lit >= 8)
+        target("default >= 15x faster than dynamic-size user code", m, dyn, dyn >= 15)
+        for s_ in ("svd", "cod"):
+            r = t(f"law/{m}/{s_}") / default
+            target(f"rank-revealing ({s_.upper()}) <= 3x default", m, r, r <= 3)
+    return out
 
+
+def general_time(t, m):
+    general = t(f"law/{m}/cholesky_dense_refactor")
+    return t(f"law/{m}/cholesky_refactor") if math.isnan(general) else general
+
+
+def solve_split(b, models):
+    t = timed(b)
+    out = ["", "### Where the time goes: the model's terms and the solve", "",
+           "Every row evaluates the model's terms once; `model_terms` times that alone. The solve is a row's "
+           "time minus it (same run; a difference of two medians, so small ones are noisy); the baselines' "
+           "solve includes copying the terms into their own matrices. The last two columns are the KKT "
+           "baseline's solve over the law's.", "",
+           "| system | model terms | solve: default | solve: general | solve: plain_fixed | solve: dynamic KKT "
+           "| KKT / default (solve) | KKT / general (solve) |", "|---|---|---|---|---|---|---|---|"]
+
+    def over(a, b_):  # a difference of two medians can be at or below zero: then no ratio
+        return f"{a / b_:.2f}x" if a > 0 and b_ > 0 else "n/a"
+
+    for m in models:
+        terms = t(f"baseline/{m}/model_terms")
+        if math.isnan(terms):
+            continue
+        solve = [t(f"law/{m}/cholesky") - terms, general_time(t, m) - terms, t(f"baseline/{m}/plain_fixed") - terms,
+                 t(f"baseline/{m}/dynamic_kkt") - terms]
+        out.append(f"| {m} | {ns(terms)} | " + " | ".join(ns(v) for v in solve)
+                   + f" | {over(solve[3], solve[0])} | {over(solve[3], solve[1])} |")
+    return out
+
+
+def phases(b, models):
+    t = timed(b)
+    kernels = ("mass_cholesky", "constraint_solve", "gram", "gram_cholesky", "gram_inverse")
+    phased = [m for m in models if f"phase/{m}/kkt_lu" in b]
+    if not phased:
+        return []
+    out = ["", "### The general case's solve taken apart", "",
+           "Each kernel of the refactoring path alone (`phase/*`, the law's own kernels on the benchmark "
+           "states' terms, each input copied in first): Cholesky of A (N^3/3 flops), B^T = L^-1 D^T "
+           "(N^2 P), the Gram matrix B B^T (2 N P^2, the full product), its Cholesky (P^3/3) and the "
+           "inverse factor the condition bound needs (P^3/3); with P = 1 the law takes a scalar path "
+           "instead of the last two (shown as -). `rest` is the general row's solve (row less "
+           "`model_terms`) less the kernels it runs: the right-hand sides and their triangular solves, the "
+           "products, the checks and the residual. Beside it the KKT baseline's LU alone as a user writes "
+           "it (`kkt_lu`: a `PartialPivLU<MatrixXd>` constructed on the assembled matrix, so its 3 "
+           "allocations, the matrix's copy and Eigen's norm pass included; 2 (N+P)^3/3 flops) and the KKT "
+           "row's solve (row less `model_terms`).", "",
+           "| system | " + " | ".join(kernels) + " | rest | general solve | kkt_lu | KKT solve |",
+           "|---|" + "---|" * (len(kernels) + 4)]
+    for m in phased:
+        general, terms = general_time(t, m), t(f"baseline/{m}/model_terms")
+        scalar = m.endswith("x1")  # P = 1: no Gram Cholesky nor inverse factor in the law
+        parts = [math.nan if scalar and k in ("gram_cholesky", "gram_inverse") else t(f"phase/{m}/{k}")
+                 for k in kernels]
+        rest = general - terms - sum(v for v in parts if not math.isnan(v))
+        out.append(f"| {m} | " + " | ".join("-" if math.isnan(v) else ns(v) for v in parts)
+                   + f" | {ns(rest)} | {ns(general - terms)} | "
+                   f"{ns(t(f'phase/{m}/kkt_lu'))} | {ns(t(f'baseline/{m}/dynamic_kkt') - terms)} |")
+    return out
+
+
+def growth(b, models):
+    t = timed(b)
+    chains = sorted(((int(m.split("_")[1].split("x")[0]), m) for m in models if m.startswith("chain_")))
+    if len(chains) < 3:
+        return [""]
+    out = ["", "### Growth with N (Duffing chains, P = N/2)", "",
+           "Least-squares slope of log(time) against log(N), N = " + ", ".join(str(n) for n, _ in chains) + ":", ""]
+    for code in [f"law/{{}}/{s}" for s in STRATEGIES] + [f"baseline/{{}}/{s}" for s in BASELINES[:3]]:
+        xs = [math.log(n) for n, m in chains if code.format(m) in b]
+        ys = [math.log(t(code.format(m))) for n, m in chains if code.format(m) in b]
+        if len(xs) >= 3:
+            mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+            slope = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
+            out.append(f"- `{code.format('chain')}`: time ~ N^{slope:.2f}")
+    return out + [""]
+
+
+def plant_step(d):
     step = load(d, "step_cost_bench.json")
-    if step:
-        b = benchmarks(step)
-        out += ["## Plant step as effects are added", "",
-                "1000 RK4 steps (4 right-hand-side evaluations each) of the Duffing plant with the first k effects "
-                "of eq. (35) and more (`BM_PlantStep/k`); no controller.", "", "| benchmark | time |", "|---|---|"]
-        out += [f"| {k} | {ns(v[0])} |" for k, v in b.items()]
-        out.append("")
+    if not step:
+        return []
+    b = benchmarks(step)
+    out = ["## Plant step as effects are added", "",
+           "1000 RK4 steps (4 right-hand-side evaluations each) of the Duffing plant with the first k effects "
+           "of eq. (35) and more (`BM_PlantStep/k`); no controller.", "", "| benchmark | time |", "|---|---|"]
+    return out + [f"| {k} | {ns(v[0])} |" for k, v in b.items()] + [""]
 
+
+def firmware_loop(d):
     fw = load(d, "firmware_loop.json")
-    if fw:
-        out += ["## Firmware-style loop", "",
-                f"{fw['iterations']} iterations at a {fw['period_us']} us period: sensor read, law, actuator "
-                "write (histogram in firmware_loop.txt).", "",
-                "| law | p50 | p99 | p99.9 | max | wake jitter p99 | allocations | max tracking error |",
-                "|---|---|---|---|---|---|---|---|"]
-        for k in ("closed_form", "gausstrack"):
-            r = fw[k]
-            lat, jit = r["latency_ns"], r["jitter_ns"]
-            out.append(f"| {k} | {ns(lat['p50'])} | {ns(lat['p99'])} | {ns(lat['p999'])} | {ns(lat['max'])} | "
-                       f"{ns(jit['p99'])} | {r['allocations']} | {r['max_tracking_error']:.2e} |")
-        out.append("")
+    if not fw:
+        return []
+    out = ["## Firmware-style loop", "",
+           f"{fw['iterations']} iterations at a {fw['period_us']} us period: sensor read, law, actuator "
+           "write (histogram in firmware_loop.txt).", "",
+           "| law | p50 | p99 | p99.9 | max | wake jitter p99 | allocations | max tracking error |",
+           "|---|---|---|---|---|---|---|---|"]
+    for k in ("closed_form", "gausstrack"):
+        r = fw[k]
+        lat, jit = r["latency_ns"], r["jitter_ns"]
+        out.append(f"| {k} | {ns(lat['p50'])} | {ns(lat['p99'])} | {ns(lat['p999'])} | {ns(lat['max'])} | "
+                   f"{ns(jit['p99'])} | {r['allocations']} | {r['max_tracking_error']:.2e} |")
+    return out + [""]
 
+
+def transport(d):
     tr = load(d, "transport.json")
     loop = load(d, os.path.join("closed_loop", "summary.json"))
+    out = []
     if tr:
         out += ["## Transport: round trip between two processes", "",
                 f"State {tr['state_bytes']} bytes out, command {tr['command_bytes']} bytes back, "
@@ -264,14 +291,18 @@ def main(d, page=None):
             out.append(f"| gausstrack-run closed loop, 1 kHz real time (state to command, with the law) | "
                        f"{r['p50']:.1f} us | {r['p99']:.1f} us | {r['p999']:.1f} us | {r['max']:.1f} us |")
         out.append("")
-
     floor = os.path.join(d, "loop_vs_floor", "README.md")
     if os.path.exists(floor):
         with open(floor) as f:
             body = f.read().split("\n", 1)[1]
         out += ["## The closed loop against the machine's floors (same run)", body]
+    return out
 
-    out += studies(d)
+
+def main(d, page=None):
+    out = ["# Benchmarks", "", "Written by `scripts/bench`; every figure in a table comes from one run on the machine "
+           "that ran it, baselines included.", ""]
+    out += control_law(d) + plant_step(d) + firmware_loop(d) + transport(d) + studies(d)
     with open(os.path.join(d, "README.md"), "w") as f:
         f.write("\n".join(out) + "\n")
     print(os.path.join(d, "README.md"))
