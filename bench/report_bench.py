@@ -54,6 +54,13 @@ def ns(v):
     return f"{v / 1e3:.2f} us" if v >= 1e4 else f"{v:.0f} ns"
 
 
+def demote(text_or_lines):
+    """Headings one level down (the lines of a text or a list of lines that may hold several)."""
+    lines = text_or_lines if isinstance(text_or_lines, list) else [text_or_lines]
+    lines = [l for item in lines for l in item.split("\n")]
+    return [("#" + l if l.startswith("#") else l) for l in lines]
+
+
 def studies(d):
     """The accuracy and MuJoCo studies' own tables (their headings one level down), if they ran."""
     out = []
@@ -64,7 +71,7 @@ def studies(d):
                 lines = f.read().rstrip("\n").split("\n")
             if lines and lines[0].startswith("# "):
                 lines = lines[1:]
-            out += [f"## {title}", ""] + [("#" + l if l.startswith("#") else l) for l in lines] + [""]
+            out += [f"## {title}", ""] + demote(lines) + [""]
     return out
 
 
@@ -77,7 +84,8 @@ def update_doc(page, body):
     if begin is None or end is None or end < begin:
         print(f"report_bench.py: {page} has no '{BEGIN} ...' and '{END} ...' lines", file=sys.stderr)
         return 1
-    body = [("#" + l if l.startswith("## ") or l.startswith("### ") else l) for l in body]
+    # Figures stay beside the run's own README (out/bench/...): the page carries the tables.
+    body = [l for l in demote(body) if not l.startswith("![")]
     with open(page, "w") as f:
         f.write("\n".join(lines[:begin + 1] + body + lines[end:]))
     print(page)
@@ -104,7 +112,8 @@ def control_law(d):
         parts = name.split("/")
         if len(parts) == 3 and parts[1] not in models:
             models.append(parts[1])
-    return out + law_table(b, models) + targets(b, models) + solve_split(b, models) + phases(b, models) + growth(b, models)
+    return (out + law_table(b, models) + targets(b, models) + solve_split(b, models) + phases(b, models)
+            + growth(b, models) + natural_form(b))
 
 
 def timed(b):
@@ -246,6 +255,28 @@ def growth(b, models):
     return out + [""]
 
 
+def natural_form(b):
+    """Rows derived from phi (or psi) against the same rows written by hand, and the jet against
+    Eigen's AutoDiffScalar."""
+    t = timed(b)
+    systems = sorted({k.split("/")[1] for k in b if k.startswith("natural/")})
+    if not systems:
+        return []
+    out = ["## Constraints in their natural form", "",
+           "A controller call whose rows are derived from phi against the same rows written by hand (target: "
+           "within 1.5x), and the one-pass jet (D, e, e', g) against Eigen's `AutoDiffScalar` (fixed-size "
+           "derivatives, nested for the second directional derivative).", "",
+           "| system | derived | hand-written | derived / hand-written | met | jet | Eigen AutoDiff |",
+           "|---|---|---|---|---|---|---|"]
+    for m in systems:
+        derived, hand = t(f"natural/{m}/derived"), t(f"natural/{m}/hand_written")
+        jet, autodiff = t(f"jet/{m}/ours"), t(f"jet/{m}/eigen_autodiff")
+        ratio = derived / hand
+        out.append(f"| {m} | {ns(derived)} | {ns(hand)} | {ratio:.2f}x | {'yes' if ratio <= 1.5 else '**no**'} | "
+                   + " | ".join("-" if math.isnan(v) else ns(v) for v in (jet, autodiff)) + " |")
+    return out + [""]
+
+
 def plant_step(d):
     step = load(d, "step_cost_bench.json")
     if not step:
@@ -295,7 +326,7 @@ def transport(d):
     if os.path.exists(floor):
         with open(floor) as f:
             body = f.read().split("\n", 1)[1]
-        out += ["## The closed loop against the machine's floors (same run)", body]
+        out += ["## The closed loop against the machine's floors (same run)"] + demote(body)
     return out
 
 

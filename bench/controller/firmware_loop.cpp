@@ -128,6 +128,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;  // --help, or a usage error (printed)
   }
+  if (!std::isfinite(period_us)) return std::fprintf(stderr, "error: --period-us must be finite\n"), 2;
   const auto period_ns = static_cast<std::int64_t>(std::llround(period_us * 1e3));
   const auto n = static_cast<std::size_t>(iterations);
 

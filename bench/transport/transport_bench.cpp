@@ -25,6 +25,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <memory>
 #include <csignal>
@@ -255,6 +256,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;  // --help, or a usage error (printed)
   }
+  if (!std::isfinite(pacing.rate_hz) || !std::isfinite(seconds))
+    return std::fprintf(stderr, "error: --rate and --seconds must be finite\n"), 2;
   if (cpus.size() == 2) {
     pacing.pacing_cpu = cpus[0];
     pacing.answering_cpu = cpus[1];

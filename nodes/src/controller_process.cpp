@@ -30,7 +30,7 @@ void write_controller_stats(const std::string& path, const std::string& model, c
       {"rejected_stale", c.stale},      {"log_dropped", log_dropped},
       {"compute_ns", percentiles_json(compute_ns)}};
   std::ofstream out(path);
-  out << j.dump(2) << '\n';
+  out << j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << '\n';
   if (!out) throw std::runtime_error("cannot write " + path);
 }
 

@@ -97,7 +97,9 @@ nlohmann::ordered_json summary_json(const Scene& scene, const RunResult& result)
 void write_json(const nlohmann::ordered_json& document, const std::string& path) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path);
-  out << document.dump(2) << "\n";
+  // Text that is not UTF-8 (a scene's name, an engine's message) is written with replacement
+  // characters rather than lose the summary.
+  out << document.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
   if (!out) throw std::runtime_error("error writing " + path);
 }
 

@@ -25,13 +25,16 @@ std::unique_ptr<PlantEngine> make_engine(const Scene& s, const RunOptions& o) {
 class Run {
  public:
   Run(const Scene& s, const RunOptions& o);
+  Run(const Run&) = delete;  // the stepper holds this run's address and its held force
+  Run& operator=(const Run&) = delete;
   RunResult execute();
 
  private:
   bool hold_force(std::int64_t period, double t0);
   bool advance(double t0, double t1);
+  void restart_projected();
   void rhs(const State& x, State& dxdt, double t);
-  void emit_until(double t);
+  void emit_until(double t, bool project);
   void record(const State& x, double t);
   bool may_go_on(double t, const State& x, double h);
   void fail(double t, std::string why);
@@ -72,8 +75,6 @@ Run::Run(const Scene& s, const RunOptions& o)
       rhs_q_(n_), rhs_qd_(n_), rhs_u_(n_), rhs_qdd_(n_), measured_q_(n_), measured_qd_(n_),
       x_(2 * n_), scratch_(2 * n_),
       sample_count_(static_cast<std::size_t>(std::floor(s.duration / s.output_period + 1e-9)) + 1) {
-  if (o.sampled_control && !sampled_)
-    throw SceneError(s.file + ": control from another process needs control.mode: sampled");
   for (int i = 0; i < n_; ++i) {
     x_(i) = s.q0[static_cast<std::size_t>(i)];
     x_(n_ + i) = s.qd0[static_cast<std::size_t>(i)];
@@ -138,10 +139,14 @@ bool Run::hold_force(std::int64_t period, double t0) {
   return true;
 }
 
-// One segment [t0, t1] from x_; x_ is then the state at t1 (projected when the scene asks).
-// Samples are the projected states at their times; the next step starts from the projected
-// state. False when the run cannot go on (its failure or stop is in the summary).
+// One segment [t0, t1] from x_; x_ is then the state at t1. With projection (plant.projection),
+// samples are the projected states at their times and each step starts from the projected state:
+// a stepper without interpolation is projected as soon as a step is accepted; one with dense
+// output keeps the step's end state until its samples are interpolated, then restarts from the
+// projection. False when the run cannot go on (its failure or stop is in the summary).
 bool Run::advance(double t0, double t1) {
+  const bool project_now = project_ && !stepper_->interpolates();
+  const bool project_after = project_ && stepper_->interpolates();
   stepper_->start(x_, t0, t1);
   while (!stepper_->done()) {
     const double next_output =
@@ -151,21 +156,26 @@ bool Run::advance(double t0, double t1) {
       fail(stepper_->time(), std::move(outcome.failure));
       return false;
     }
-    // Samples up to a finite step are kept even when the run cannot go on after it.
     if (outcome.accepted) {
       ++stats_.steps;
-      if (stepper_->state().allFinite()) emit_until(std::min(stepper_->time(), t1));
+      if (project_now) restart_projected();
+      // Samples up to a finite step are kept even when the run cannot go on after it.
+      if (stepper_->state().allFinite()) emit_until(std::min(stepper_->time(), t1), project_after);
     }
     if (!may_go_on(stepper_->time(), stepper_->state(), stepper_->step_size())) return false;
-    if (outcome.accepted && project_ && !stepper_->done()) {
-      scratch_ = stepper_->state();
-      plant_.project(scratch_, stepper_->time(), stats_);
-      stepper_->restart(scratch_);
-    }
+    if (outcome.accepted && project_after && !stepper_->done()) restart_projected();
   }
   stepper_->state_at(t1, x_);
-  if (project_) plant_.project(x_, t1, stats_);
-  return true;
+  if (project_after) plant_.project(x_, t1, stats_);
+  if (x_.allFinite()) return true;
+  fail(t1, "the state left the finite range at t = " + number(t1) + " s: " + describe_state(x_));
+  return false;
+}
+
+void Run::restart_projected() {
+  scratch_ = stepper_->state();
+  plant_.project(scratch_, stepper_->time(), stats_);
+  stepper_->restart(scratch_);
 }
 
 void Run::rhs(const State& x, State& dxdt, double t) {
@@ -182,12 +192,13 @@ void Run::rhs(const State& x, State& dxdt, double t) {
   dxdt.tail(n_) = rhs_qdd_;
 }
 
-// The samples due by t (exact output times k * output_period), from the stepper's states.
-void Run::emit_until(double t) {
+// The samples due by t (exact output times k * output_period), from the stepper's states,
+// projected when `project` (interpolated states).
+void Run::emit_until(double t, bool project) {
   while (next_sample_ < sample_count_ && sample_time(next_sample_) <= t * (1 + 1e-14)) {
     const double ts = sample_time(next_sample_);
     stepper_->state_at(ts, scratch_);
-    if (project_) plant_.project(scratch_, ts, stats_);
+    if (project) plant_.project(scratch_, ts, stats_);
     record(scratch_, ts);
     ++next_sample_;
   }
@@ -265,6 +276,8 @@ std::vector<double> evaluate(const Scene& s, const std::vector<double>& q, const
 }  // namespace detail
 
 RunResult run_scene(const Scene& scene, const RunOptions& options) {
+  if (options.sampled_control && scene.control_mode != ControlMode::kSampled)
+    throw SceneError(scene.file + ": control from another process needs control.mode: sampled");
   return detail::Run(scene, options).execute();
 }
 

@@ -318,9 +318,6 @@ void read_integrator(const Reader& root, Scene& s) {
   else s.tolerance = integ.positive("tolerance");
   s.min_step = integ.positive("min_step", 1e-12 * s.duration);
   s.max_steps = integ.positive("max_steps", s.max_steps);
-  if (s.method == Method::kRk4 && s.duration / s.step > s.max_steps)
-    integ.child("step").fail("gives " + Reader::format(s.duration / s.step) + " steps, above integrator.max_steps (" +
-                             Reader::format(s.max_steps) + ")");
 }
 
 // Duration and output grid, and the periods that must fit it: samples in memory, time still
@@ -339,11 +336,16 @@ void read_time_grid(const Reader& root, Scene& s) {
 }
 
 void check_periods(const Reader& root, const Scene& s) {
+  const bool engine = !s.engine.name.empty();
+  if (s.method == Method::kRk4 && s.duration / s.step > s.max_steps)
+    (engine ? root.child("plant").child("timestep") : root.child("integrator").child("step"))
+        .fail("gives " + Reader::format(s.duration / s.step) + " steps, above integrator.max_steps (" +
+              Reader::format(s.max_steps) + ")");
   if (s.control_mode == ControlMode::kSampled && s.duration * s.control_rate > s.max_steps)
     root.child("control").fail("gives " + Reader::format(s.duration * s.control_rate) +
                                " control periods, above integrator.max_steps (" + Reader::format(s.max_steps) + ")");
   if (s.method != Method::kRk4) return;
-  const std::string steps = std::string(s.engine.name.empty() ? "rk4" : "engine") + " steps (step " +
+  const std::string steps = std::string(engine ? "engine" : "rk4") + " steps (step " +
                             Reader::format(s.step) + ")";
   auto whole = [](double ratio) { return std::abs(ratio - std::round(ratio)) <= 1e-9 * ratio; };
   if (!whole(s.output_period / s.step)) root.child("output_period").fail("must be a whole number of " + steps);

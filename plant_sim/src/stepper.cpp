@@ -60,6 +60,7 @@ class DenseStepper final : public Stepper {
   }
   void restart(const State& x) override { dense_.initialize(x, dense_.current_time(), dense_.current_time_step()); }
   bool adaptive() const override { return true; }
+  bool interpolates() const override { return true; }
 
  private:
   Dense dense_;
@@ -103,6 +104,7 @@ class ClippedStepper final : public Stepper {
   void state_at(double, State& x) const override { x = x_; }
   void restart(const State& x) override { x_ = x; }
   bool adaptive() const override { return true; }
+  bool interpolates() const override { return false; }
 
  private:
   using Rkf78 = odeint::runge_kutta_fehlberg78<State, double, State, double, Algebra>;
@@ -129,6 +131,7 @@ class FixedSteps : public Stepper {
   void state_at(double, State& x) const override { x = x_; }
   void restart(const State& x) override { x_ = x; }
   bool adaptive() const override { return false; }
+  bool interpolates() const override { return false; }
 
  protected:
   State x_;

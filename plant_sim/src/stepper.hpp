@@ -44,6 +44,9 @@ class Stepper {
   virtual void restart(const State& x) = 0;
   /// Whether step sizes adapt (then collapsing steps end the run).
   virtual bool adaptive() const = 0;
+  /// Whether states between steps are interpolated (dense output): then a step's end state must
+  /// stay as it is until its samples are taken, and the projection comes after them.
+  virtual bool interpolates() const = 0;
 };
 
 /// The scene's method (integrator.method) on the right-hand side, or the engine when the scene

@@ -137,6 +137,18 @@ TEST(Models, ProjectionRemovesConstraintDrift) {
   }
 }
 
+// Without interpolation (rk4, rkf78) each accepted step is projected once, before its samples are
+// taken: exactly one projection per step, and every sample is a projected state.
+TEST(Models, StepsWithoutInterpolationAreProjectedOnceEach) {
+  for (const char* method : {"integrator={method: rk4, step: 1.0e-3}", "integrator={method: rkf78, tolerance: 1.0e-8}"}) {
+    const RunResult r =
+        run_scene(load_scene(kScenes + "/pendulum_fig2.yaml", {method, "plant.projection=true", "duration=2"}));
+    ASSERT_TRUE(r.summary.failure.empty()) << r.summary.failure;
+    EXPECT_EQ(r.summary.projections, r.summary.steps) << method;
+    EXPECT_LT(r.summary.max_constraint_residual, 1e-9) << method;
+  }
+}
+
 // A user's own model: one mass tracking x = sin(t) from the constraint written as phi(q, t).
 struct SineTracker {
   using Scalar = double;

@@ -255,6 +255,8 @@ TEST(MujocoScenes, BadEngineScenesAreRefusedWithTheirReason) {
             std::string::npos);
   EXPECT_NE(error_of({"plant.effects=[gravity, wind]"}).find("unknown effect 'wind'"), std::string::npos);
   EXPECT_NE(error_of({"plant.model=missing.xml"}).find("cannot open the model file"), std::string::npos);
+  // A timestep the step budget cannot cover is refused when the scene loads, not after 1e8 steps.
+  EXPECT_NE(error_of({"plant.timestep=1.0e-12"}).find("plant.timestep: gives"), std::string::npos);
   EXPECT_NE(error_of({"integrator={method: rk4, step: 1.0e-3}"}).find("the engine integrates"), std::string::npos);
   EXPECT_NE(error_of({"control={mode: continuous}"}).find("needs control.mode: sampled"), std::string::npos);
   EXPECT_NE(error_of({"plant.timestep=3.0e-4"}).find("whole number of engine steps"), std::string::npos);

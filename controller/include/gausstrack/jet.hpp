@@ -18,8 +18,8 @@
 // of the nested pass also carries AutoDiffScalar's expression machinery. Ours gets all four in one
 // pass of plain arithmetic. bench/controller/natural_form_bench.cpp measures both on the same
 // constraints (the pendulum's length, the arm's hand) and checks they give the same rows: both
-// are allocation-free for fixed sizes; ours took 0.9x Eigen's time on the pendulum and 0.5x on
-// the arm (docs/performance.md).
+// are allocation-free for fixed sizes; their times are in docs/performance.md ("Constraints in
+// their natural form").
 //
 // Functions a constraint may use: + - * / with jets and scalars, and sin, cos, tan, exp, log,
 // sqrt, pow (scalar exponent), abs, atan, atan2, asin, acos, sinh, cosh, tanh, found by
