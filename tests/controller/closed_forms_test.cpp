@@ -33,13 +33,13 @@ TEST(ClosedForms, Eq37ProjectorPseudoInverse) {
     const double z = rng.uniform(-10, 10);
     const Eigen::RowVector3d D(-z, 1, 0);
     const Eigen::Vector3d d_minus = Eigen::Vector3d(-z, 1, 0) / (1 + z * z);  // as printed
-    ASSERT_TRUE(near(reference::pseudo_inverse(D, 1e-12), d_minus, 1e-14, 1, "D^- of eq. 37"));
+    ASSERT_TRUE(near(oracle::pseudo_inverse(D, 1e-12), d_minus, 1e-14, 1, "D^- of eq. 37"));
     const Eigen::Matrix3d projector = Eigen::Matrix3d::Identity() - d_minus * D;
     Eigen::Matrix3d expected;
     expected << 1, z, 0, z, z * z, 0, 0, 0, 1 + z * z;
     expected /= 1 + z * z;
     expected(2, 2) = 1;
-    ASSERT_TRUE(near(reference::pseudo_inverse(projector, 1e-12), expected, 1e-12, 1, "eq. 37"))
+    ASSERT_TRUE(near(oracle::pseudo_inverse(projector, 1e-12), expected, 1e-12, 1, "eq. 37"))
         << "z = " << z;
   }
 }

@@ -39,9 +39,8 @@ TYPED_TEST_P(CrossCheck, AllFormulationsAgree) {
   const int repeat = test_repeat();
   for (int it = 0; it < repeat; ++it) {
     const auto s = rng.template system<N, P>();
-    // The literal formulas at dynamic size (compiled once for every size).
-    const auto dynamic = reference::literal_formulas<Eigen::Dynamic, Eigen::Dynamic, double>(
-        Eigen::MatrixXd(s.A), Eigen::VectorXd(s.f), Eigen::VectorXd(s.Q), Eigen::MatrixXd(s.D), Eigen::VectorXd(s.g));
+    // The literal formulas at run-time size (compiled once, oracles.cpp, for every size).
+    const oracle::Literal dynamic = oracle::literal_formulas(s.A, s.f, s.Q, s.D, s.g);
     struct {
       Eigen::Matrix<double, N, 1> acceleration, constraint_force, force_from_impressed, force_from_rhs;
     } lit{dynamic.acceleration, dynamic.constraint_force, dynamic.force_from_impressed, dynamic.force_from_rhs};

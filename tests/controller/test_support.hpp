@@ -13,7 +13,7 @@
 #include <random>
 #include <string>
 
-#include "gausstrack/reference/literal_formulas.hpp"
+#include "oracles.hpp"
 
 namespace gausstrack::test {
 
@@ -77,10 +77,6 @@ double inf_norm(const Eigen::MatrixBase<D>& m) {
   return m.size() == 0 ? 0.0 : static_cast<double>(m.cwiseAbs().maxCoeff());
 }
 
-/// The oracles below factor at dynamic sizes: one instantiation of each Eigen decomposition serves
-/// every size a test file uses, which keeps the test build light.
-template <typename Scalar>
-using DynamicMatrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
 
 /// One random constrained system of fixed sizes.
 template <int N, int P, typename Scalar = double>
@@ -107,9 +103,9 @@ class RandomSource {
 
   template <int N>
   Eigen::Matrix<Scalar, N, N> orthogonal() {
-    // Dynamic-size decomposition: compiled once for every size the tests draw.
-    const Eigen::HouseholderQR<DynamicMatrix<Scalar>> qr(DynamicMatrix<Scalar>(matrix<N, N>()));
-    return Eigen::Matrix<Scalar, N, N>(qr.householderQ());
+    // The factorization is compiled once (oracles.cpp) for every size the tests draw.
+    const Eigen::MatrixXd m = matrix<N, N>().template cast<double>();
+    return oracle::orthogonal_factor(m).template cast<Scalar>();
   }
 
   /// Symmetric positive definite with eigenvalues log-uniform in [scale/cond, scale].
@@ -147,39 +143,39 @@ class RandomSource {
   std::mt19937_64 rng_;
 };
 
+/// The oracles at run-time size (oracles.cpp) on a fixed-size system: its matrices in double.
+template <int N, int P, typename Scalar>
+struct AsDynamic {
+  Eigen::MatrixXd A, D;
+  Eigen::VectorXd f, Q, g;
+  explicit AsDynamic(const RandomSystem<N, P, Scalar>& s)
+      : A(s.A.template cast<double>()), D(s.D.template cast<double>()), f(s.f.template cast<double>()),
+        Q(s.Q.template cast<double>()), g(s.g.template cast<double>()) {}
+};
+
 /// Compact form Q' = A^(1/2) (D A^(-1/2))^+ (g - D a), a = A^-1 (Q - f), with the symmetric square
 /// root (not the Cholesky factor the solver uses).
 template <int N, int P, typename Scalar>
 Eigen::Matrix<Scalar, N, 1> compact_form_force(const RandomSystem<N, P, Scalar>& s,
                                                Scalar tol = Scalar(1e-10)) {
-  using M = DynamicMatrix<Scalar>;
-  const M A = s.A, D = s.D;
-  const Eigen::SelfAdjointEigenSolver<M> eig(A);
-  const M a = A.llt().solve(M(s.Q - s.f));
-  const M b = D * eig.operatorInverseSqrt();
-  return Eigen::Matrix<Scalar, N, 1>(eig.operatorSqrt() * reference::pseudo_inverse(b, tol) * (M(s.g) - D * a));
+  const AsDynamic<N, P, Scalar> d(s);
+  return oracle::compact_form_force(d.A, d.f, d.Q, d.D, d.g, double(tol)).template cast<Scalar>();
 }
 
 /// Lagrange multipliers: [A -D^T; D 0] [q''; mu] = [Q - f; g], Q' = D^T mu (full row rank D).
 template <int N, int P, typename Scalar>
 std::pair<Eigen::Matrix<Scalar, N, 1>, Eigen::Matrix<Scalar, N, 1>> kkt_solution(
     const RandomSystem<N, P, Scalar>& s) {
-  DynamicMatrix<Scalar> k = DynamicMatrix<Scalar>::Zero(N + P, N + P);
-  k.topLeftCorner(N, N) = s.A;
-  k.topRightCorner(N, P) = -s.D.transpose();
-  k.bottomLeftCorner(P, N) = s.D;
-  DynamicMatrix<Scalar> rhs(N + P, 1);
-  rhs << s.Q - s.f, s.g;
-  const DynamicMatrix<Scalar> x = k.fullPivLu().solve(rhs);
-  const Eigen::Matrix<Scalar, P, 1> mu = x.bottomRows(P);
-  return {x.topRows(N), s.D.transpose() * mu};
+  const AsDynamic<N, P, Scalar> d(s);
+  const auto [qdd, force] = oracle::kkt_solution(d.A, d.f, d.Q, d.D, d.g);
+  return {qdd.template cast<Scalar>(), force.template cast<Scalar>()};
 }
 
 /// Gauss's function, eq. (14): (A q'' + f - Q)^T A^-1 (A q'' + f - Q).
 template <int N, int P, typename Scalar>
 Scalar gauss_function(const RandomSystem<N, P, Scalar>& s, const Eigen::Matrix<Scalar, N, 1>& qdd) {
-  const DynamicMatrix<Scalar> r = s.A * qdd + s.f - s.Q;
-  return (r.transpose() * DynamicMatrix<Scalar>(s.A).llt().solve(r))(0, 0);
+  const AsDynamic<N, P, Scalar> d(s);
+  return Scalar(oracle::gauss_function(d.A, d.f, d.Q, qdd.template cast<double>()));
 }
 
 /// A random v with D v = 0 (projection of a random vector on the null space of D).
@@ -187,8 +183,8 @@ template <int N, int P, typename Scalar>
 Eigen::Matrix<Scalar, N, 1> null_space_vector(const Eigen::Matrix<Scalar, P, N>& D,
                                               RandomSource<Scalar>& rng) {
   const Eigen::Matrix<Scalar, N, 1> w = rng.template matrix<N, 1>();
-  const DynamicMatrix<Scalar> pinv = reference::pseudo_inverse(DynamicMatrix<Scalar>(D), Scalar(1e-12));
-  return w - Eigen::Matrix<Scalar, N, 1>(pinv * (D * w));
+  const Eigen::MatrixXd pinv = oracle::pseudo_inverse(D.template cast<double>(), 1e-12);
+  return w - (pinv * (D * w).template cast<double>()).template cast<Scalar>();
 }
 
 }  // namespace gausstrack::test
