@@ -5,22 +5,21 @@
 //   fault_relay --a URL --b URL --state-channel C --command-channel C [--delay-ms D] [--jitter-ms J]
 //               [--loss P] [--duplicate P] [--reorder P] [--down-at-s T --down-ms M] [--seed S]
 // Runs until SIGINT/SIGTERM and prints what it did.
+#include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
 #include <poll.h>
 
-#include <csignal>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <ctime>
 #include <queue>
 #include <random>
 #include <string>
 #include <vector>
 
-namespace {
+#include "gausstrack/tracking/stop_request.hpp"
 
-volatile std::sig_atomic_t g_stop = 0;
+namespace {
 
 std::int64_t now_ns() {
   timespec t{};
@@ -113,34 +112,35 @@ class Relay {
 
 int main(int argc, char** argv) {
   Options o;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--a") o.a = v;
-    else if (k == "--b") o.b = v;
-    else if (k == "--state-channel") o.state_channel = v;
-    else if (k == "--command-channel") o.command_channel = v;
-    else if (k == "--delay-ms") o.delay_ms = std::atof(v.c_str());
-    else if (k == "--jitter-ms") o.jitter_ms = std::atof(v.c_str());
-    else if (k == "--loss") o.loss = std::atof(v.c_str());
-    else if (k == "--duplicate") o.duplicate = std::atof(v.c_str());
-    else if (k == "--reorder") o.reorder = std::atof(v.c_str());
-    else if (k == "--down-at-s") o.down_at_s = std::atof(v.c_str());
-    else if (k == "--down-ms") o.down_ms = std::atof(v.c_str());
-    else if (k == "--seed") o.seed = static_cast<unsigned>(std::atoi(v.c_str()));
-    else return std::fprintf(stderr, "fault_relay: unknown option %s\n", k.c_str()), 2;
+  CLI::App app{"fault_relay: a faulty network between plant and controller"};
+  app.add_option("--a", o.a, "LCM URL of the plant's side")->required();
+  app.add_option("--b", o.b, "LCM URL of the controller's side")->required();
+  app.add_option("--state-channel", o.state_channel)->capture_default_str();
+  app.add_option("--command-channel", o.command_channel)->capture_default_str();
+  app.add_option("--delay-ms", o.delay_ms, "added one-way delay [ms]")->check(CLI::NonNegativeNumber);
+  app.add_option("--jitter-ms", o.jitter_ms, "uniform jitter on top of the delay [ms]")->check(CLI::NonNegativeNumber);
+  app.add_option("--loss", o.loss, "probability of dropping a message")->check(CLI::Range(0.0, 1.0));
+  app.add_option("--duplicate", o.duplicate, "probability of sending a message twice")->check(CLI::Range(0.0, 1.0));
+  app.add_option("--reorder", o.reorder, "probability of holding a message back")->check(CLI::Range(0.0, 1.0));
+  app.add_option("--down-at-s", o.down_at_s, "take the link down at this time [s]");
+  app.add_option("--down-ms", o.down_ms, "for this long [ms]")->check(CLI::NonNegativeNumber);
+  app.add_option("--seed", o.seed)->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
   }
-  if (o.a.empty() || o.b.empty() || o.a == o.b) return std::fprintf(stderr, "fault_relay: --a and --b must differ\n"), 2;
+  if (o.a == o.b) return std::fprintf(stderr, "fault_relay: --a and --b must differ\n"), 2;
   lcm::LCM a(o.a), b(o.b);
   if (!a.good() || !b.good()) return std::fprintf(stderr, "fault_relay: cannot open LCM\n"), 1;
   Relay relay(o, a, b);
   a.subscribe(o.state_channel, &Relay::from_a, &relay);
   b.subscribe(o.command_channel, &Relay::from_b, &relay);
-  std::signal(SIGINT, [](int) { g_stop = 1; });
-  std::signal(SIGTERM, [](int) { g_stop = 1; });
+  gausstrack::stop_on_signals();
   std::printf("fault_relay: ready\n");
   std::fflush(stdout);
   pollfd fds[2] = {{a.getFileno(), POLLIN, 0}, {b.getFileno(), POLLIN, 0}};
-  while (!g_stop) {
+  while (!gausstrack::g_stop_requested) {
     const std::int64_t next = relay.release_due();
     const std::int64_t wait = next < 0 ? 10000000 : std::max<std::int64_t>(0, next - now_ns());
     const timespec timeout{static_cast<time_t>(wait / 1000000000), static_cast<long>(wait % 1000000000)};

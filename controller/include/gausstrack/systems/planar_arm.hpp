@@ -67,28 +67,30 @@ struct PlanarArm {
       s[i] = std::sin(theta);
       w[i] = omega;
     }
-    terms.mass_matrix.setZero();
-    terms.nonlinear_force.setZero();
-    terms.applied_force.setZero();
-    // Centre of mass i: Jv_i column k (k <= i) is sum_{j=k}^{i-1} l_j (-s_j, c_j) + r_i (-s_i, c_i);
-    // its acceleration at q'' = 0 is -sum_{j<i} l_j w_j^2 (c_j, s_j) - r_i w_i^2 (c_i, s_i).
+    Scalar a[3][3] = {}, f[3] = {}, g[3] = {};
     for (int i = 0; i < 3; ++i) {
-      Eigen::Matrix<Scalar, 2, 3> jv = Eigen::Matrix<Scalar, 2, 3>::Zero();
-      Eigen::Matrix<Scalar, 2, 1> bias(-com(i) * w[i] * w[i] * c[i], -com(i) * w[i] * w[i] * s[i]);
-      Eigen::Matrix<Scalar, 2, 1> column(-com(i) * s[i], com(i) * c[i]);
+      Scalar jx[3] = {}, jy[3] = {};
+      Scalar cx = -com(i) * s[i], cy = com(i) * c[i];
+      Scalar bx = -com(i) * w[i] * w[i] * c[i], by = -com(i) * w[i] * w[i] * s[i];
       for (int k = i; k >= 0; --k) {
-        jv.col(k) = column;
+        jx[k] = cx, jy[k] = cy;
         if (k > 0) {
-          column += Eigen::Matrix<Scalar, 2, 1>(-length(k - 1) * s[k - 1], length(k - 1) * c[k - 1]);
-          bias -= length(k - 1) * w[k - 1] * w[k - 1] * Eigen::Matrix<Scalar, 2, 1>(c[k - 1], s[k - 1]);
+          cx -= length(k - 1) * s[k - 1], cy += length(k - 1) * c[k - 1];
+          const Scalar lw2 = length(k - 1) * w[k - 1] * w[k - 1];
+          bx -= lw2 * c[k - 1], by -= lw2 * s[k - 1];
         }
       }
-      terms.mass_matrix.noalias() += mass(i) * jv.transpose() * jv;
-      terms.mass_matrix.topLeftCorner(i + 1, i + 1).array() += inertia(i);
-      terms.nonlinear_force.noalias() += mass(i) * jv.transpose() * bias;
-      terms.applied_force -= (mass(i) * gravity) * jv.row(1).transpose();
+      for (int r = 0; r <= i; ++r) {
+        for (int k = 0; k <= i; ++k) a[r][k] += mass(i) * (jx[r] * jx[k] + jy[r] * jy[k]) + inertia(i);
+        f[r] += mass(i) * (jx[r] * bx + jy[r] * by);
+        g[r] -= mass(i) * gravity * jy[r];
+      }
     }
-    terms.applied_force -= damping * qd;
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k) terms.mass_matrix(r, k) = a[r][k];
+      terms.nonlinear_force(r) = f[r];
+      terms.applied_force(r) = g[r] - damping * qd(r);
+    }
   }
 
   /// The hand's position p(q) [m].
