@@ -7,10 +7,14 @@
 // - a decoded state or command that the codec accepts has finite values and its dimension;
 // - the controller node accounts for every datagram (served + repeated + rejected), and every
 //   command it publishes decodes, answers that run with a finite force, and is zero when failed;
-// - the plant node accounts for every command (kept or refused, never applied twice).
+// - the plant node accounts for every command (kept or refused, never applied twice);
+// - with the pair's key the nodes account for authentication refusals too, and datagrams the
+//   harness seals with that key reach the checks behind the authentication.
 #include <lcm/lcm-cpp.hpp>
 
+#include <array>
 #include <cstddef>
+#include <cstring>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -19,6 +23,7 @@
 #include "gausstrack/control_command_t.hpp"
 #include "gausstrack/control_diagnostics_t.hpp"
 #include "gausstrack/loop_stats_t.hpp"
+#include "gausstrack/nodes/auth.hpp"
 #include "gausstrack/nodes/codec.hpp"
 #include "gausstrack/nodes/controller_node.hpp"
 #include "gausstrack/nodes/message_log.hpp"
@@ -100,31 +105,47 @@ std::size_t next_length(FuzzInput& in) {
 }
 
 // A sequence of datagrams for one controller node: each is its length and that many bytes.
-void controller_case(FuzzInput& in) {
+// With the pair's key: each datagram is sealed with it or not, as its flag byte says.
+void controller_case(FuzzInput& in, bool authenticated) {
   Harness& h = harness();
   gn::ControllerNode<Duffing> node(gausstrack::TrackingController<Duffing>{}, h.commands, nullptr, 16);
+  const gn::MessageKey key(std::array<std::uint8_t, gn::kKeyBytes>{7});
+  gn::ChannelAuth open(key, "STATE"), seal(key, "STATE");
+  if (authenticated) node.authenticate(open);
+  std::array<std::uint8_t, gn::kMessageBufferBytes> sealed{};
   const long before = h.commands_seen;
   long datagrams = 0;
   while (in.rest_size() > 0) {
+    const bool seal_this = authenticated && (in.byte() & 1) != 0;
     std::size_t n = next_length(in);
     const std::uint8_t* bytes = in.rest();
     for (std::size_t i = 0; i < n; ++i) in.byte();
+    if (seal_this && n + gn::kTrailerBytes <= sealed.size()) {
+      std::memcpy(sealed.data(), bytes, n);
+      const int m = seal.seal(sealed.data(), n, sealed.size());
+      GAUSSTRACK_FUZZ_CHECK(m == static_cast<int>(n + gn::kTrailerBytes));
+      bytes = sealed.data();
+      n = static_cast<std::size_t>(m);
+    }
     node.handle(bytes, n);
     ++datagrams;
   }
   h.drain();
   const gn::ControllerCounts& c = node.counts();
   GAUSSTRACK_FUZZ_CHECK(c.served + c.repeated + c.rejected == datagrams);
-  GAUSSTRACK_FUZZ_CHECK(c.rejected == c.malformed + c.wrong_dimension + c.non_finite + c.stale);
+  GAUSSTRACK_FUZZ_CHECK(c.rejected == c.malformed + c.wrong_dimension + c.non_finite + c.stale + c.auth.total());
+  if (!authenticated) GAUSSTRACK_FUZZ_CHECK(c.auth.total() == 0);
   GAUSSTRACK_FUZZ_CHECK(h.commands_seen - before == c.served + c.repeated);
 }
 
-void plant_case(FuzzInput& in) {
+void plant_case(FuzzInput& in, bool authenticated) {
   Harness& h = harness();
   gn::PlantNodeOptions o;
   o.run_id = kPlantRunId;
   o.periods = 16;
   gn::PlantNode node(h.lcm, h.states, "PLANT_COMMAND", 1 + in.byte() % 32, o);
+  gn::ChannelAuth open(gn::MessageKey(std::array<std::uint8_t, gn::kKeyBytes>{7}), "PLANT_COMMAND");
+  if (authenticated) node.authenticate(open);
   long datagrams = 0;
   while (in.rest_size() > 0) {
     std::size_t n = next_length(in);
@@ -137,7 +158,9 @@ void plant_case(FuzzInput& in) {
   const gn::PlantCounts& c = node.counts();
   // No state was published, so no command can be kept: each one is refused for a stated reason.
   GAUSSTRACK_FUZZ_CHECK(c.rejected == datagrams);
-  GAUSSTRACK_FUZZ_CHECK(c.rejected == c.malformed + c.wrong_dimension + c.non_finite + c.stale + c.other_run);
+  GAUSSTRACK_FUZZ_CHECK(c.rejected ==
+                        c.malformed + c.wrong_dimension + c.non_finite + c.stale + c.other_run + c.auth.total());
+  GAUSSTRACK_FUZZ_CHECK(open.last_accepted() == 0);  // nothing the fuzzer writes carries the key's tag
   GAUSSTRACK_FUZZ_CHECK(c.commands_applied == 0);
 }
 
@@ -162,9 +185,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       codec_case(dimension, in.rest(), in.rest_size());
       break;
     }
-    case 5:
-    case 6: controller_case(in); break;
-    default: plant_case(in); break;
+    case 5: controller_case(in, false); break;
+    case 6: controller_case(in, true); break;
+    default: plant_case(in, (selector & 8) != 0); break;
   }
   return 0;
 }

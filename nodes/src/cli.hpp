@@ -26,6 +26,9 @@ inline void add_process_options(CLI::App& app, ProcessOptions& o) {
       ->check(CLI::Range(1, 99));
   app.add_option("--cpu", o.cpu, "pin the process to this CPU")->check(CLI::Range(0, 1023));
   app.add_flag("--lock-memory", o.lock_memory, "mlockall: keep the process's memory resident");
+  app.add_option("--key", o.key_path, "the pair's key file (gausstrack-keygen): sign what this process sends, "
+                                      "accept only what the other signed")
+      ->check(CLI::ExistingFile);
   auto* log = app.add_option("--log", o.log_path, "record every message this process publishes (LCM log)");
   app.add_flag("--log-wait", o.log_wait, "when the log's buffer is full, wait rather than drop")->needs(log);
 }

@@ -27,7 +27,9 @@ void write_controller_stats(const std::string& path, const std::string& model, c
       {"commands_repeated", c.repeated}, {"runs", c.runs},
       {"messages_rejected", c.rejected}, {"rejected_malformed", c.malformed},
       {"rejected_dimension", c.wrong_dimension}, {"rejected_non_finite", c.non_finite},
-      {"rejected_stale", c.stale},      {"log_dropped", log_dropped},
+      {"rejected_stale", c.stale},      {"rejected_unauthenticated", c.auth.unauthenticated},
+      {"rejected_bad_tag", c.auth.bad_tag}, {"rejected_replayed", c.auth.replayed},
+      {"log_dropped", log_dropped},
       {"compute_ns", percentiles_json(compute_ns)}};
   std::ofstream out(path);
   out << j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << '\n';

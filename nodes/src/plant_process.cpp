@@ -32,6 +32,11 @@ void PlantNode::add_to_summary(nlohmann::ordered_json& j, long log_dropped) cons
   j["deadline_misses"] = scheduler_.misses();
   j["messages_rejected"] = counts_.rejected;
   j["commands_of_other_runs"] = counts_.other_run;
+  j["rejected"] = {{"malformed", counts_.malformed},         {"dimension", counts_.wrong_dimension},
+                   {"non_finite", counts_.non_finite},       {"stale", counts_.stale},
+                   {"other_run", counts_.other_run},         {"unauthenticated", counts_.auth.unauthenticated},
+                   {"bad_tag", counts_.auth.bad_tag},        {"replayed", counts_.auth.replayed}};
+  j["authenticated"] = auth_ != nullptr;
   j["states_resent"] = counts_.states_resent;
   j["watchdog_trips"] = watchdog_.trips();
   j["log_dropped"] = log_dropped;
@@ -106,9 +111,12 @@ int run_plant(const PlantProcessOptions& o, const plant_sim::Scene& scene, plant
   lcm::LCM lcm(p.lcm_url);
   if (!lcm.good()) return std::fprintf(stderr, "error: cannot open LCM (%s)\n", p.lcm_url.c_str()), 1;
   // Lock-step is not real time: its log waits for the disk rather than drop a message.
-  Outbox state_out(lcm, p.state_channel, log.get(), node_options.lockstep || p.log_wait);
+  PairAuth auth = open_pair_auth(p, "gausstrack-plant");
+  Outbox state_out(lcm, p.state_channel, log.get(), node_options.lockstep || p.log_wait,
+                   auth.enabled() ? &*auth.states : nullptr);
   Outbox stats_out(lcm, p.stats_channel, log.get(), true);
   PlantNode node(lcm, state_out, p.command_channel, scene.dof(), node_options);
+  if (auth.enabled()) node.authenticate(*auth.commands);
 
   run_options.on_progress = terminal_progress(scene);
   run_options.sampled_control = [&](std::int64_t period, double t, std::span<const double> q,

@@ -31,7 +31,7 @@ wait $plant
 kill -TERM $controller; wait $controller || true
 cat "$work/plant.log" "$work/controller.log"
 
-line=$(grep "gausstrack-plant:" "$work/plant.log")
+line=$(grep "gausstrack-plant: [0-9]" "$work/plant.log")
 num() { echo "$line" | sed -E "s/.* ([0-9]+) $1.*/\1/"; }
 published=$(num "states published") applied=$(num "commands applied") missing=$(num "missing")
 trips=$(num "watchdog trips")

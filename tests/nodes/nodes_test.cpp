@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "gausstrack/nodes/auth.hpp"
 #include "gausstrack/nodes/codec.hpp"
 #include "gausstrack/nodes/controller_node.hpp"
 #include "gausstrack/nodes/plant_node.hpp"
@@ -303,6 +304,61 @@ TEST_F(ControllerFixture, DiagnosticsTravelApartAndAddUpToTheForce) {
   EXPECT_LT(control_command_t{}.getEncodedSize(), 2 * 32 * 8);
 }
 
+// With the pair's key the controller answers only states that verify, and seals its commands;
+// refused states (no trailer, another key, a replay) change nothing it remembers.
+TEST(AuthenticatedController, AnswersOnlyVerifiedStatesAndSealsItsCommands) {
+  lcm::LCM lcm{"memq://"};
+  ASSERT_TRUE(lcm.good());
+  const MessageKey key(std::array<std::uint8_t, kKeyBytes>{1, 2, 3}), other(std::array<std::uint8_t, kKeyBytes>{9});
+  ChannelAuth seal_commands(key, "CMD"), open_states(key, "STATE");
+  Outbox commands{lcm, "CMD", nullptr, false, &seal_commands};
+  ControllerNode<Duffing> node{plant_sim::make_controller<Duffing>(duffing_spec()), commands};
+  node.authenticate(open_states);
+  struct Verified {
+    ChannelAuth open;
+    std::vector<control_command_t> commands;
+    long refused = 0;
+    void on(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      std::size_t size = 0;
+      if (open.open(rbuf->data, rbuf->data_size, size) != AuthRefusal::kNone) return void(++refused);
+      control_command_t c{};
+      ASSERT_EQ(c.decode(rbuf->data, 0, static_cast<int>(size)), static_cast<int>(size));
+      commands.push_back(c);
+    }
+  } out{ChannelAuth(key, "CMD"), {}, 0};
+  lcm.subscribe("CMD", &Verified::on, &out);
+  lcm.subscribe("STATE", &ControllerNode<Duffing>::on_state, &node);
+  ChannelAuth plant(key, "STATE"), stranger(other, "STATE");
+  auto sealed = [](ChannelAuth& by, std::vector<std::uint8_t> b) {
+    const std::size_t size = b.size();
+    b.resize(size + kTrailerBytes);
+    b.resize(static_cast<std::size_t>(by.seal(b.data(), size, b.size())));
+    return b;
+  };
+  auto send = [&](const std::vector<std::uint8_t>& bytes) {
+    lcm.publish("STATE", bytes.data(), static_cast<unsigned>(bytes.size()));
+    while (lcm.handleTimeout(0) > 0) {
+    }
+  };
+  send(encode_state(2, 9, 0, 0.0, {0.1, 0}, {0, 0}));  // no trailer
+  const auto first = sealed(plant, encode_state(2, 9, 0, 0.0, {0.1, 0}, {0, 0}));
+  send(first);
+  ASSERT_EQ(out.commands.size(), 1u);
+  send(first);                                                      // replayed
+  send(sealed(stranger, encode_state(2, 9, 5, 0.0, {0.1, 0}, {0, 0})));  // another key
+  send(sealed(plant, encode_state(2, 9, 1, 0.01, {0.2, 0}, {0, 0})));
+  ASSERT_EQ(out.commands.size(), 2u);
+  EXPECT_EQ(out.refused, 0);
+  EXPECT_EQ(out.commands[1].state_sequence, 1);
+  const ControllerCounts& c = node.counts();
+  EXPECT_EQ(c.auth.unauthenticated, 1);
+  EXPECT_EQ(c.auth.replayed, 1);
+  EXPECT_EQ(c.auth.bad_tag, 1);
+  EXPECT_EQ(c.rejected, 3);
+  EXPECT_EQ(c.served, 2);
+  EXPECT_EQ(c.repeated, 0);  // a replayed state is not the plant asking again
+}
+
 // ---------------------------------------------------------------------------------------------
 // Plant node
 
@@ -311,6 +367,7 @@ struct FakeController {
   lcm::LCM* lcm;
   std::function<void(const plant_state_t&, control_command_t&)> reply;
   int answered = 0;
+  ChannelAuth* seal = nullptr;  ///< seals its commands with this, when given
   void on(const lcm::ReceiveBuffer* rbuf, const std::string&) {
     plant_state_t s{};
     ASSERT_GE(s.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)), 0);
@@ -319,8 +376,10 @@ struct FakeController {
     c.state_sequence = s.sequence;
     c.dimension = s.dimension;
     reply(s, c);
-    std::vector<std::uint8_t> b(static_cast<std::size_t>(c.getEncodedSize()));
-    c.encode(b.data(), 0, static_cast<int>(b.size()));
+    const auto size = static_cast<std::size_t>(c.getEncodedSize());
+    std::vector<std::uint8_t> b(size + kTrailerBytes);
+    c.encode(b.data(), 0, static_cast<int>(size));
+    b.resize(seal ? static_cast<std::size_t>(seal->seal(b.data(), size, b.size())) : size);
     lcm->publish("CMD", b.data(), static_cast<unsigned>(b.size()));
     ++answered;
   }
@@ -425,6 +484,50 @@ TEST_F(PlantFixture, RealTimeWatchdogAppliesTheSafeActionThenRecovers) {
   EXPECT_EQ(u[0], 5.0);
   EXPECT_FALSE(node.watchdog().tripped());
   EXPECT_EQ(node.counts().commands_applied + node.counts().commands_missing, k);
+}
+
+// A rogue process answers every state first, without the key or with a key of its own: nothing of
+// it is applied, the paired controller's answers are.
+TEST_F(PlantFixture, WithAKeyARogueAnswerFirstIsRefusedAndThePairedControllersApplied) {
+  const MessageKey key(std::array<std::uint8_t, kKeyBytes>{4, 2}), own(std::array<std::uint8_t, kKeyBytes>{6});
+  ChannelAuth open_commands(key, "CMD"), controller(key, "CMD"), forger(own, "CMD");
+  PlantNode node(lcm, states, "CMD", 2, options(true));
+  node.authenticate(open_commands);
+  fake.reply = [](const plant_state_t&, control_command_t& c) { c.force[0] = 50.0, c.sequence = 1'000'000'000; };
+  FakeController forged{&lcm, fake.reply, 0, &forger};
+  FakeController paired{&lcm, [](const plant_state_t& s, control_command_t& c) { c.force[0] = 1.0 + static_cast<double>(s.sequence); },
+                        0, &controller};
+  lcm.subscribe("STATE", &FakeController::on, &forged);
+  lcm.subscribe("STATE", &FakeController::on, &paired);
+  const std::array<double, 2> q{0, 0}, qd{0, 0};
+  std::array<double, 2> u{};
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_TRUE(node.exchange(k, 0.005 * k, q, qd, u));
+    EXPECT_EQ(u[0], 1.0 + k);
+  }
+  EXPECT_EQ(node.counts().commands_applied, 3);
+  EXPECT_EQ(node.counts().auth.unauthenticated, 3);
+  EXPECT_EQ(node.counts().auth.bad_tag, 3);
+  EXPECT_EQ(node.counts().rejected, 6);
+}
+
+// The pair does not share a key: the plant ends the run at the timeout and says why.
+TEST_F(PlantFixture, WithAKeyAndOnlyUnverifiedAnswersTheRunEnds) {
+  const MessageKey key(std::array<std::uint8_t, kKeyBytes>{4, 2});
+  ChannelAuth open_commands(key, "CMD");
+  fake.reply = [](const plant_state_t&, control_command_t& c) { c.force[0] = 50.0; };
+  for (bool lockstep : {true, false}) {
+    PlantNode node(lcm, states, "CMD", 2, options(lockstep));
+    node.authenticate(open_commands);
+    const std::array<double, 2> q{0, 0}, qd{0, 0};
+    std::array<double, 2> u{};
+    int k = 0;
+    while (k < 400 && node.exchange(k, 0.005 * k, q, qd, u)) ++k;
+    EXPECT_LT(k, 400) << lockstep;
+    EXPECT_EQ(u[0], 0.0);
+    EXPECT_EQ(node.counts().commands_applied, 0);
+    EXPECT_GE(node.counts().auth.unauthenticated, 1);
+  }
 }
 
 TEST(Watchdog, TripsOncePerOutageAndClearsOnACommand) {

@@ -33,5 +33,5 @@ for _ in $(seq 100); do grep -q ready "$work/controller.log" && break; sleep 0.0
 kill -TERM $pid
 wait $pid
 cat "$work/controller.log"
-grep -q "gausstrack-controller: ready (coupled_duffing, 2 coordinates, 1 constraint rows)" "$work/controller.log"
+grep -q "gausstrack-controller: ready (coupled_duffing, 2 coordinates, 1 constraint rows, unauthenticated)" "$work/controller.log"
 echo "controller built and ran without the simulator"

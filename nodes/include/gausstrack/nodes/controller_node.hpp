@@ -9,6 +9,9 @@
 //   while (!g_stop_requested) lcm.handleTimeout(100);
 //
 // Wire contract:
+// - With the pair's key (authenticate()), a state whose trailer does not verify (none, another
+//   key, altered, or a counter not above the last accepted: replayed) is counted by reason and
+//   dropped before anything of it is read; the commands are sealed by the outbox.
 // - A state that does not decode, has another dimension or a non-finite value is counted and
 //   dropped; so is one of the current plant run whose sequence is older than the last, and one
 //   of a run that has ended (a late datagram of a plant that restarted).
@@ -31,6 +34,7 @@
 #include <utility>
 
 #include "gausstrack/model.hpp"
+#include "gausstrack/nodes/auth.hpp"
 #include "gausstrack/nodes/codec.hpp"
 #include "gausstrack/nodes/latency_recorder.hpp"
 #include "gausstrack/nodes/message_log.hpp"
@@ -46,6 +50,7 @@ struct ControllerCounts {
   long failed = 0;      ///< commands reporting a failed solve (force zero)
   long rejected = 0;    ///< states refused (any reason below)
   long malformed = 0, wrong_dimension = 0, non_finite = 0, stale = 0;
+  AuthCounts auth;      ///< refused by authentication, by reason (also in rejected)
   long runs = 0;        ///< plant runs seen
 };
 
@@ -64,11 +69,25 @@ class ControllerNode {
     ended_runs_.fill(INT64_MIN);
   }
 
+  /// From now on accepts only states that verify with `states` (the state channel's
+  /// authentication, which must outlive the node).
+  void authenticate(ChannelAuth& states) noexcept { auth_ = &states; }
+
   /// LCM subscription handler.
   void on_state(const lcm::ReceiveBuffer* rbuf, const std::string&) noexcept { handle(rbuf->data, rbuf->data_size); }
 
   /// Validates one encoded plant state and, if it is served, publishes the command.
   void handle(const void* data, std::size_t size) noexcept {
+    if (auth_) {
+      std::size_t message_size = 0;
+      const AuthRefusal a = auth_->open(data, size, message_size);
+      if (a != AuthRefusal::kNone) {
+        counts_.auth.count(a);
+        ++counts_.rejected;
+        return;
+      }
+      size = message_size;
+    }
     const Refusal r = codec_.decode_state(data, size, state_, q_, qd_);
     if (r != Refusal::kNone) return refuse(r == Refusal::kMalformed   ? counts_.malformed
                                            : r == Refusal::kDimension ? counts_.wrong_dimension
@@ -136,6 +155,7 @@ class ControllerNode {
   Codec<N> codec_;
   Outbox& commands_;
   Outbox* diagnostics_;
+  ChannelAuth* auth_ = nullptr;
   plant_state_t state_{};
   control_command_t command_{};
   control_diagnostics_t diag_{};

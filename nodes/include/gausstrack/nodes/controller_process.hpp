@@ -52,13 +52,15 @@ int run_controller(const ControllerProcessOptions& o, const tracking::TrackingSp
   apply_realtime(p, "gausstrack-controller");
   lcm::LCM lcm(p.lcm_url);  // empty: LCM_DEFAULT_URL or LCM's own default
   if (!lcm.good()) return std::fprintf(stderr, "error: cannot open LCM (%s)\n", p.lcm_url.c_str()), 1;
-  Outbox commands(lcm, p.command_channel, log.get(), p.log_wait);
+  PairAuth auth = open_pair_auth(p, "gausstrack-controller");
+  Outbox commands(lcm, p.command_channel, log.get(), p.log_wait, auth.enabled() ? &*auth.commands : nullptr);
   Outbox diagnostics(lcm, p.diagnostics_channel, o.diagnostics ? log.get() : nullptr, p.log_wait);
   Outbox stats_outbox(lcm, p.stats_channel, log.get(), true);
   ControllerNode<M> node(tracking::make_controller<M>(spec, defaults), commands, o.diagnostics ? &diagnostics : nullptr);
+  if (auth.enabled()) node.authenticate(*auth.states);
   lcm.subscribe(p.state_channel, &ControllerNode<M>::on_state, &node);
-  std::printf("gausstrack-controller: ready (%s, %d coordinates, %d constraint rows)\n", spec.model.c_str(), M::kDof,
-              M::kConstraints);
+  std::printf("gausstrack-controller: ready (%s, %d coordinates, %d constraint rows, %s)\n", spec.model.c_str(),
+              M::kDof, M::kConstraints, auth.enabled() ? "authenticated" : "unauthenticated");
   std::fflush(stdout);
   while (!g_stop_requested) lcm.handleTimeout(100);
 
@@ -85,6 +87,10 @@ int run_controller(const ControllerProcessOptions& o, const tracking::TrackingSp
   std::printf("gausstrack-controller: %ld commands published (%ld failed solves), %ld plant runs, %ld messages "
               "rejected, compute p50 %.0f ns, p99 %.0f ns, max %.0f ns\n",
               c.served, c.failed, c.runs, c.rejected, stats.compute_ns_p50, stats.compute_ns_p99, stats.compute_ns_max);
+  if (c.auth.total() > 0)
+    std::printf("gausstrack-controller: %ld states failed authentication (%ld with another key or altered, %ld "
+                "without a key, %ld replayed)%s\n", c.auth.total(), c.auth.bad_tag, c.auth.unauthenticated,
+                c.auth.replayed, c.served == 0 ? ": no state verified, the plant must run with this key (--key)" : "");
   return 0;
 }
 

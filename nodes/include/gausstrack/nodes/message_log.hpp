@@ -15,6 +15,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -25,6 +26,9 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "gausstrack/nodes/auth.hpp"
+#include "gausstrack/nodes/codec.hpp"
 
 namespace gausstrack::nodes {
 
@@ -128,11 +132,21 @@ class MessageLog {
 /// (statistics, once per run) encodes into a temporary.
 class Outbox {
  public:
-  Outbox(lcm::LCM& lcm, std::string channel, MessageLog* log, bool wait_if_full)
+  /// `seal`: the channel's authentication (the pair's key), or nullptr to publish messages as
+  /// they are. The log records what is published.
+  Outbox(lcm::LCM& lcm, std::string channel, MessageLog* log, bool wait_if_full, ChannelAuth* seal = nullptr)
       : lcm_(lcm), channel_(std::move(channel)), log_(log), wait_(wait_if_full),
-        log_channel_(log ? log->add_channel(channel_) : -1) {}
+        log_channel_(log ? log->add_channel(channel_) : -1), seal_(seal) {}
 
   void publish(const void* data, std::size_t size, std::int64_t utime) noexcept {
+    if (seal_) {
+      if (size > sealed_.size()) return;
+      std::memcpy(sealed_.data(), data, size);
+      const int n = seal_->seal(sealed_.data(), size, sealed_.size());
+      if (n < 0) return;
+      data = sealed_.data();
+      size = static_cast<std::size_t>(n);
+    }
     if (log_) log_->record(log_channel_, data, size, utime, wait_);
     lcm_.publish(channel_, data, static_cast<unsigned>(size));
   }
@@ -150,6 +164,8 @@ class Outbox {
   MessageLog* log_;
   bool wait_;
   int log_channel_;
+  ChannelAuth* seal_;
+  std::array<std::uint8_t, kMessageBufferBytes + kTrailerBytes> sealed_{};
 };
 
 /// Closes the process's log (if it keeps one) and returns how many messages it could not record,

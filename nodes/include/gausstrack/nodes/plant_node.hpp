@@ -13,6 +13,11 @@
 //   applies the safe action (zero force, or hold the last one) until commands return.
 // A command reporting a failed solve is applied as zero force and counted, never ignored in
 // favour of an older force. Commands for another run (a previous plant process) are refused.
+// With the pair's key (authenticate()), a command whose trailer does not verify is counted by
+// reason and dropped before anything of it is read; the states are sealed by their outbox. A run
+// in which no command has verified within the timeout (--timeout-ms, from the start) ends, saying
+// why: the controller is missing or holds another key (it then refuses this plant's states). Each period takes at most kMaxPerPeriod messages off the
+// socket before it applies its command, so a flood cannot hold the period back.
 #pragma once
 
 #include <lcm/lcm-cpp.hpp>
@@ -31,6 +36,7 @@
 #include <string>
 
 #include "gausstrack/loop_stats_t.hpp"
+#include "gausstrack/nodes/auth.hpp"
 #include "gausstrack/nodes/codec.hpp"
 #include "gausstrack/nodes/latency_recorder.hpp"
 #include "gausstrack/nodes/message_log.hpp"
@@ -124,6 +130,7 @@ struct PlantCounts {
   long commands_failed = 0, states_resent = 0;
   long rejected = 0;  ///< commands refused, for one of these reasons:
   long malformed = 0, wrong_dimension = 0, non_finite = 0, stale = 0, other_run = 0;
+  AuthCounts auth;  ///< refused by authentication, by reason (also in rejected)
 };
 
 class PlantNode {
@@ -143,6 +150,13 @@ class PlantNode {
     subscription_ = lcm_.subscribe(command_channel, &PlantNode::on_command, this);
   }
   ~PlantNode() { lcm_.unsubscribe(subscription_); }
+  /// From now on accepts only commands that verify with `commands` (the command channel's
+  /// authentication, which must outlive the node).
+  void authenticate(ChannelAuth& commands) noexcept { auth_ = &commands; }
+
+  /// Messages taken off the socket at a period's deadline before its command is applied.
+  static constexpr int kMaxPerPeriod = 64;
+
   PlantNode(const PlantNode&) = delete;
   PlantNode& operator=(const PlantNode&) = delete;
 
@@ -166,7 +180,7 @@ class PlantNode {
       // the newest command and publish the state.
       service_until(scheduler_.deadline(period), [] { return false; });
       const std::int64_t now = scheduler_.wait_for(period);
-      while (lcm_.handleTimeout(0) > 0) {
+      for (int i = 0; i < kMaxPerPeriod && lcm_.handleTimeout(0) > 0; ++i) {
       }
       if (answered_ > last_applied_) {
         last_applied_ = answered_;
@@ -176,6 +190,9 @@ class PlantNode {
       } else {
         ++counts_.commands_missing;
         if (watchdog_.check(now) && !o_.safe_hold) hold_.setZero();
+        if (auth_ && counts_.commands_applied == 0 &&
+            now - scheduler_.deadline(0) > static_cast<std::int64_t>(o_.timeout_ms) * 1000000)
+          return refuse_to_run("in real time");
       }
       for (int i = 0; i < n; ++i) u[static_cast<std::size_t>(i)] = hold_(i);
       awaited_ = period;
@@ -198,6 +215,7 @@ class PlantNode {
     if (g_stop_requested) return false;
     if (!ready_) {
       ++counts_.commands_missing;
+      if (auth_ && counts_.commands_applied == 0) return refuse_to_run("in lock-step");
       std::fprintf(stderr,
                    "error: no command answered state %lld within %d ms (commands refused meanwhile: %ld malformed, "
                    "%ld of another dimension, %ld non-finite, %ld stale, %ld of another run)\n",
@@ -219,6 +237,16 @@ class PlantNode {
   /// newest one answering a published state not yet answered; counts and drops the rest.
   /// `received_ns`: when it arrived, on the wall clock [ns since the Unix epoch].
   void handle_command(const void* data, std::size_t size, std::int64_t received_ns) noexcept {
+    if (auth_) {
+      std::size_t message_size = 0;
+      const AuthRefusal a = auth_->open(data, size, message_size);
+      if (a != AuthRefusal::kNone) {
+        counts_.auth.count(a);
+        ++counts_.rejected;
+        return;
+      }
+      size = message_size;
+    }
     switch (codec_.decode_command(data, size, incoming_, incoming_force_)) {
       case Refusal::kNone: break;
       case Refusal::kMalformed: return reject(&counts_.malformed);
@@ -302,6 +330,16 @@ class PlantNode {
     return dimension;
   }
 
+  // A run whose commands all failed authentication: the pair does not share a key.
+  bool refuse_to_run(const char* mode) noexcept {
+    const AuthCounts& a = counts_.auth;
+    std::fprintf(stderr,
+                 "error: no command verified within %d ms %s (refused: %ld with another key or altered, %ld without "
+                 "a key, %ld replayed): is the controller running, with this plant's key (--key)?\n",
+                 o_.timeout_ms, mode, a.bad_tag, a.unauthenticated, a.replayed);
+    return false;
+  }
+
   void reject(long* reason) noexcept {
     ++counts_.rejected;
     ++*reason;
@@ -349,6 +387,7 @@ class PlantNode {
   PeriodScheduler scheduler_;
   Watchdog watchdog_;
   lcm::Subscription* subscription_ = nullptr;
+  ChannelAuth* auth_ = nullptr;
   std::int64_t run_id_ = 0;
   plant_state_t state_{};
   control_command_t incoming_{};

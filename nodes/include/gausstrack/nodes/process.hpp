@@ -13,9 +13,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "gausstrack/nodes/auth.hpp"
 #include "gausstrack/tracking/stop_request.hpp"
 
 namespace gausstrack::nodes {
@@ -51,7 +53,29 @@ struct ProcessOptions {
   bool lock_memory = false;   ///< mlockall(MCL_CURRENT | MCL_FUTURE)
   std::string log_path;       ///< record every message this process publishes (MessageLog)
   bool log_wait = false;      ///< when the log's buffer is full, wait rather than drop (lock-step)
+  std::string key_path;       ///< the pair's key file (gausstrack-keygen); empty: unauthenticated
 };
+
+/// The authentication of the state and command channels with the pair's key (--key), or none.
+struct PairAuth {
+  std::optional<ChannelAuth> states, commands;
+  bool enabled() const noexcept { return states.has_value(); }
+};
+
+/// Reads the key named by --key; without one, says at start-up that anyone who can reach the LCM
+/// group can command the plant. Throws std::runtime_error when the key file cannot be used.
+inline PairAuth open_pair_auth(const ProcessOptions& o, const char* program) {
+  PairAuth auth;
+  if (o.key_path.empty()) {
+    std::fprintf(stderr, "%s: warning: no key (--key FILE): messages are not authenticated, and anyone who can "
+                         "reach this LCM group can command the plant\n", program);
+    return auth;
+  }
+  const MessageKey key = MessageKey::load(o.key_path);
+  auth.states.emplace(key, o.state_channel);
+  auth.commands.emplace(key, o.command_channel);
+  return auth;
+}
 
 /// Applies the real-time options asked for to the calling thread and to the threads it creates
 /// afterwards (they inherit the policy and the CPU). The processes call it after opening their
