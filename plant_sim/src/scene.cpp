@@ -189,7 +189,8 @@ void read_engine(const Reader& plant, Scene& s) {
 
 bool names_engine(const Reader& plant) {
   if (!plant.has("engine")) return false;
-  const YAML::Node& e = plant.child("engine").node();
+  const Reader engine = plant.child("engine");  // node() refers into the Reader: keep it alive
+  const YAML::Node& e = engine.node();
   return !(e.IsScalar() && e.Scalar() == "gausstrack");
 }
 
