@@ -330,10 +330,36 @@ def transport(d):
     return out
 
 
+def authentication(d):
+    doc = load(d, "auth_bench.json")
+    if not doc:
+        return []
+    b = benchmarks(doc)
+    t = {k: v[0] for k, v in b.items()}
+    out = ["## Message authentication per message", "",
+           "What a receiver does with one message (`auth_bench`): the decode alone (the work before "
+           "authentication), and with the keyed BLAKE2b verification in front; what refusing costs; the "
+           "sender's seal.", "", "| step | time | beside the decode alone |", "|---|---|---|"]
+    for kind in ("command", "state"):
+        dec, ver = t.get(f"BM_Decode/{kind}"), t.get(f"BM_VerifyAndDecode/{kind}")
+        if dec and ver:
+            out.append(f"| {kind}: decode alone | {ns(dec)} | 1 |")
+            out.append(f"| {kind}: verify and decode | {ns(ver)} | {ver / dec:.1f}x |")
+    for name, label in (("BM_RefuseGarbage", "refuse bytes without a trailer"),
+                        ("BM_RefuseForged", "refuse a forged trailer (whole hash)"), ("BM_Seal", "seal a command")):
+        if name in t:
+            out.append(f"| {label} | {ns(t[name])} | |")
+    forged = t.get("BM_RefuseForged")
+    if forged:
+        out += ["", f"At {ns(forged)} per forged message one core refuses about {1e9 / forged / 1e3:.0f} thousand "
+                "per second; garbage costs less."]
+    return out + [""]
+
+
 def main(d, page=None):
     out = ["# Benchmarks", "", "Written by `scripts/bench`; every figure in a table comes from one run on the machine "
            "that ran it, baselines included.", ""]
-    out += control_law(d) + plant_step(d) + firmware_loop(d) + transport(d) + studies(d)
+    out += control_law(d) + plant_step(d) + firmware_loop(d) + transport(d) + authentication(d) + studies(d)
     with open(os.path.join(d, "README.md"), "w") as f:
         f.write("\n".join(out) + "\n")
     print(os.path.join(d, "README.md"))

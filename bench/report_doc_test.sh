@@ -8,6 +8,9 @@ mkdir -p "$work"
 cp "$page" "$work/once.md"
 /usr/bin/python3 "$report" "$dir" --doc "$work/once.md" > /dev/null
 grep -q '^### Control law' "$work/once.md" || { echo "no control law table in the page"; exit 1; }
+if [ -f "$dir/auth_bench.json" ]; then
+  grep -q '^### Message authentication' "$work/once.md" || { echo "no authentication table in the page"; exit 1; }
+fi
 grep -q '^## Running them' "$work/once.md" || { echo "the hand-written part was lost"; exit 1; }
 grep -q '^<!-- scripts/bench: end' "$work/once.md" || { echo "the end marker was lost"; exit 1; }
 cp "$work/once.md" "$work/twice.md"

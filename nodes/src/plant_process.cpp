@@ -43,6 +43,7 @@ void PlantNode::add_to_summary(nlohmann::ordered_json& j, long log_dropped) cons
   j["round_trip_us"] = percentiles_json(round_trip_us_);
   j["compute_ns"] = percentiles_json(compute_ns_);
   j["wake_late_us"] = o_.lockstep ? nlohmann::ordered_json() : percentiles_json(scheduler_.wake_late_us());
+  j["deadline_work_us"] = o_.lockstep ? nlohmann::ordered_json() : percentiles_json(deadline_work_us_);
 }
 
 namespace {

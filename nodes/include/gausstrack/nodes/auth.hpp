@@ -97,4 +97,19 @@ struct AuthCounts {
   }
 };
 
+/// A receiver's first step: with no `auth` every message passes; with one, a message passes only
+/// if it verifies, and `size` then becomes the size of the message before its trailer. A refused
+/// message is counted by reason in `refused` and must not be read.
+inline bool admit(ChannelAuth* auth, const void* data, std::size_t& size, AuthCounts& refused) noexcept {
+  if (auth == nullptr) return true;
+  std::size_t message_size = 0;
+  const AuthRefusal r = auth->open(data, size, message_size);
+  if (r != AuthRefusal::kNone) {
+    refused.count(r);
+    return false;
+  }
+  size = message_size;
+  return true;
+}
+
 }  // namespace gausstrack::nodes

@@ -78,15 +78,9 @@ class ControllerNode {
 
   /// Validates one encoded plant state and, if it is served, publishes the command.
   void handle(const void* data, std::size_t size) noexcept {
-    if (auth_) {
-      std::size_t message_size = 0;
-      const AuthRefusal a = auth_->open(data, size, message_size);
-      if (a != AuthRefusal::kNone) {
-        counts_.auth.count(a);
-        ++counts_.rejected;
-        return;
-      }
-      size = message_size;
+    if (!admit(auth_, data, size, counts_.auth)) {
+      ++counts_.rejected;
+      return;
     }
     const Refusal r = codec_.decode_state(data, size, state_, q_, qd_);
     if (r != Refusal::kNone) return refuse(r == Refusal::kMalformed   ? counts_.malformed

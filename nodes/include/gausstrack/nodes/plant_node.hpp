@@ -142,7 +142,8 @@ class PlantNode {
       : lcm_(lcm), states_(states), o_(o), codec_(checked(dimension)),
         scheduler_(static_cast<std::int64_t>(std::llround(1e9 / o.rate_hz)), monotonic_ns(), o.periods),
         watchdog_(static_cast<std::int64_t>(o.watchdog_ms) * 1000000, monotonic_ns()),
-        round_trip_us_(o.periods), compute_ns_(o.periods), answered_sequences_(o.periods) {
+        round_trip_us_(o.periods), compute_ns_(o.periods), answered_sequences_(o.periods),
+        deadline_work_us_(o.periods) {
     run_id_ = o.run_id != 0 ? o.run_id : random_run_id();
     hold_ = Vector::Zero(dimension);
     incoming_force_ = Vector::Zero(dimension);
@@ -198,6 +199,7 @@ class PlantNode {
       awaited_ = period;
       exact_ = false;
       publish_state(period, t, q, qd);
+      deadline_work_us_.add(static_cast<double>(monotonic_ns() - now) * 1e-3);
       return true;
     }
     awaited_ = period;
@@ -237,15 +239,9 @@ class PlantNode {
   /// newest one answering a published state not yet answered; counts and drops the rest.
   /// `received_ns`: when it arrived, on the wall clock [ns since the Unix epoch].
   void handle_command(const void* data, std::size_t size, std::int64_t received_ns) noexcept {
-    if (auth_) {
-      std::size_t message_size = 0;
-      const AuthRefusal a = auth_->open(data, size, message_size);
-      if (a != AuthRefusal::kNone) {
-        counts_.auth.count(a);
-        ++counts_.rejected;
-        return;
-      }
-      size = message_size;
+    if (!admit(auth_, data, size, counts_.auth)) {
+      ++counts_.rejected;
+      return;
     }
     switch (codec_.decode_command(data, size, incoming_, incoming_force_)) {
       case Refusal::kNone: break;
@@ -279,6 +275,9 @@ class PlantNode {
   const LatencyRecorder& round_trip_us() const noexcept { return round_trip_us_; }
   const LatencyRecorder& compute_ns() const noexcept { return compute_ns_; }
   const LatencyRecorder& answered_sequences() const noexcept { return answered_sequences_; }
+  /// Real time: per period, from the wake at its deadline to its state's publication (the bounded
+  /// drain of the socket, the command's application, the state's encoding and sending) [us].
+  const LatencyRecorder& deadline_work_us() const noexcept { return deadline_work_us_; }
   const PlantNodeOptions& options() const noexcept { return o_; }
 
   /// The run's loop statistics as the plant publishes them when it stops.
@@ -398,7 +397,7 @@ class PlantNode {
   std::array<std::int64_t, 4096> published_at_{};  ///< wall clock [ns] each state was sent
   std::int64_t awaited_ = -1, answered_ = -1, last_published_ = -1, last_applied_ = -1;
   PlantCounts counts_;
-  LatencyRecorder round_trip_us_, compute_ns_, answered_sequences_;
+  LatencyRecorder round_trip_us_, compute_ns_, answered_sequences_, deadline_work_us_;
 };
 
 }  // namespace gausstrack::nodes
