@@ -21,6 +21,7 @@ import csv
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -212,6 +213,18 @@ def run_case(idx, name, relay_args, crash, bin_dir, test_bin, scene, out):
                 settled = t
         recovery = None if settled is None else max(0.0, settled - fault_end)
     return s, errors, ctrl, recovery
+
+
+# A plant that woke this late at a period's deadline was stalled by the machine (a virtual
+# machine's host taking its CPU, another process): no network fault or crash of the other
+# process delays the plant's own wake-ups. A case that misses its expectation in such a run is
+# run once more (the table says so); a product fault shows in both runs.
+STALL_MS = 10.0
+
+
+def machine_stall_ms(s):
+    late = (s.get("wake_late_us") or {}).get("max", 0.0)
+    return late / 1e3 if late / 1e3 > STALL_MS else None
 
 
 def check(expect, s, errors, ctrl):
@@ -412,6 +425,13 @@ def main(bin_dir, test_bin, scene, out):
     for idx, (name, relay_args, crash, text, expect) in enumerate(CASES):
         s, errors, ctrl, recovery = run_case(idx, name, relay_args, crash, bin_dir, test_bin, scene, out)
         problems = check(expect, s, errors, ctrl)
+        stall = machine_stall_ms(s)
+        if problems and stall is not None:
+            # The machine, not the fault, held the loop back: judged again on a second run.
+            shutil.rmtree(os.path.join(out, f"case{idx:02d}"), ignore_errors=True)
+            s, errors, ctrl, recovery = run_case(idx, name, relay_args, crash, bin_dir, test_bin, scene, out)
+            problems = check(expect, s, errors, ctrl)
+            name += f" (run again: the machine stalled the plant {stall:.0f} ms in the first run)"
         failures += bool(problems)
         rec = "" if recovery is None else f"{recovery * 1e3:.0f} ms"
         crej = sum(c["messages_rejected"] for c in ctrl)
