@@ -18,6 +18,7 @@ gausstrack::plant_state_t sample_state() {
   s.utime = 1700000000123456;
   s.sequence = 42;
   s.t = 1.25;
+  s.hold_delay_ns = 1'000'000;
   s.dimension = 2;
   s.q[0] = 1.5;
   s.q[1] = -0.25;
@@ -32,13 +33,15 @@ TEST(Messages, PlantStateRoundTripsThroughAFixedBuffer) {
   const int size = s.getEncodedSize();
   ASSERT_LE(size, static_cast<int>(buf.size()));
   // Fixed-size arrays: the encoded size does not depend on the content.
-  EXPECT_EQ(size, 8 + 8 + 8 + 8 + 8 + 4 + 2 * 32 * 8);  // fingerprint, utime, sequence, run_id, t
+  // fingerprint, utime, sequence, run_id, t, hold_delay_ns, dimension, q, qd
+  EXPECT_EQ(size, 8 + 8 + 8 + 8 + 8 + 8 + 4 + 2 * 32 * 8);
   ASSERT_EQ(s.encode(buf.data(), 0, size), size);
   gausstrack::plant_state_t d{};
   ASSERT_EQ(d.decode(buf.data(), 0, size), size);
   EXPECT_EQ(d.utime, s.utime);
   EXPECT_EQ(d.sequence, s.sequence);
   EXPECT_EQ(d.t, s.t);
+  EXPECT_EQ(d.hold_delay_ns, s.hold_delay_ns);
   EXPECT_EQ(d.dimension, 2);
   for (int i = 0; i < 32; ++i) {
     EXPECT_EQ(d.q[i], s.q[i]);

@@ -41,7 +41,7 @@ void check_parameter_names(const Reader& parent, const char* key, const std::str
 
 TrackingSpec read_tracking(const Reader& t) {
   t.allow_only({"model", "parameters", "trajectory", "stabilization", "strategy", "force_limit",
-                "min_singular_value"});
+                "min_singular_value", "hold", "delay"});
   TrackingSpec tr;
   tr.enabled = true;
   tr.model = t.text("model");
@@ -69,13 +69,24 @@ TrackingSpec read_tracking(const Reader& t) {
   if (t.has("strategy")) {
     tr.strategy = t.choice("strategy", kStrategies, "strategy");
   }
+  tr.hold = t.choice("hold", kHoldLaws, "hold law", HoldLaw::kMidpoint);
+  tr.delay = t.non_negative("delay", 0.0);
+  tr.delay_configured = t.has("delay");
   return tr;
 }
 
 TrackingSpec parse_tracking(const std::string& yaml_text, const std::string& name,
                             const std::vector<std::string>& overrides) {
   return reading(name, [&] {
-    return read_tracking(parse_root(yaml_text, name, overrides).child("tracking"));
+    const Reader root = parse_root(yaml_text, name, overrides);
+    TrackingSpec tr = read_tracking(root.child("tracking"));
+    // The period, where the file says the control is sampled (the scene reader checks the rest
+    // of the control section).
+    if (root.has("control")) {
+      const Reader c = root.child("control");
+      if (c.text("mode", "continuous") == "sampled") tr.period = 1.0 / c.positive("rate");
+    }
+    return tr;
   });
 }
 

@@ -48,6 +48,9 @@ inline constexpr std::uint32_t kNearSingular = 1u << 4;
 /// the force exceeded a limit set with TrackingController::set_force_limit and was scaled down
 /// to it (all its parts alike); `ControlOutput::saturation_scale` says by how much.
 inline constexpr std::uint32_t kSaturated = 1u << 5;
+/// with a sampled-data hold, the law could not be evaluated at the predicted state (a non-finite
+/// prediction, a failed solve there): the force is the law's at the measured state, held.
+inline constexpr std::uint32_t kHoldAtMeasuredState = 1u << 6;
 }  // namespace warning
 
 /// Which inputs held a NaN or Inf, as bit flags in `SolveDiagnostics::non_finite_inputs`.

@@ -27,11 +27,35 @@ struct Stabilization {
   bool enabled() const noexcept { return omega > Scalar(0); }
 };
 
+/// Sampled-data control: the force computed for a state measured at t is applied from t + delay
+/// and held for one period (zero-order hold). The law at the measured state, held, meets the
+/// constraints to first order in the period; with a hold the controller evaluates the law at the
+/// middle of the hold interval instead, t_m = t + delay + period / 2, at the state predicted
+/// there through the constrained acceleration q'' it computes at t and the jerk j from the
+/// previous call's q'' (when that call measured the previous sample, at most two periods
+/// earlier; else j = 0):
+///   q_m = q + tau q' + tau^2 / 2 q'' + tau^3 / 6 j,  q'_m = q' + tau q'' + tau^2 / 2 j,
+///   tau = delay + period / 2,
+/// so that the held force is the continuous law's at the interval's midpoint and the constraints
+/// are met over the interval to second order in the period (docs/sampled_law.md). Two
+/// evaluations of the law per call. period = delay = 0 (the default): the law at the measured
+/// state, as for continuous control.
+template <typename Scalar>
+struct Hold {
+  Scalar period = Scalar(0);  ///< the hold's length [s]
+  Scalar delay = Scalar(0);   ///< from the measurement to the force's application [s]
+  bool enabled() const noexcept { return period > Scalar(0) || delay > Scalar(0); }
+  /// From the measurement to the middle of the hold interval [s].
+  Scalar lead() const noexcept { return delay + period / Scalar(2); }
+};
+
 template <typename Scalar>
 struct ControllerOptions {
   SolverOptions<Scalar> solver{};
   /// Gains for every row; TrackingController::set_stabilization changes one row's.
   Stabilization<Scalar> stabilization{};
+  /// Sampled-data hold (none by default); TrackingController::set_hold changes it.
+  Hold<Scalar> hold{};
 
   /// nullptr when the options are usable, else what is wrong with them. Never throws.
   const char* validate() const noexcept {
@@ -39,6 +63,8 @@ struct ControllerOptions {
       return "stabilization.zeta must be finite and >= 0";
     if (!std::isfinite(stabilization.omega) || stabilization.omega < Scalar(0))
       return "stabilization.omega must be finite and >= 0";
+    if (!std::isfinite(hold.period) || hold.period < Scalar(0) || !std::isfinite(hold.delay) || hold.delay < Scalar(0))
+      return "hold.period and hold.delay must be finite and >= 0";
     if (!std::isfinite(solver.damping) || solver.damping < Scalar(0))
       return "solver.damping must be finite and >= 0";
     if (!std::isfinite(solver.min_singular_value) || solver.min_singular_value < Scalar(0))
@@ -124,10 +150,25 @@ class TrackingController {
   }
   const VectorN& force_limit() const noexcept { return force_limit_; }
 
-  /// The terms of the last compute (A, f, Q, D, g, e, e' at the measured state).
+  /// The sampled-data hold. Returns false, changing nothing, unless period and delay are finite
+  /// and >= 0. The hold's memory (the previous call's acceleration) is kept: it is used only for
+  /// a call that follows it by at most two periods.
+  bool set_hold(const Hold<Scalar>& hold) noexcept {
+    if (!std::isfinite(hold.period) || !(hold.period >= Scalar(0)) || !std::isfinite(hold.delay) ||
+        !(hold.delay >= Scalar(0)))
+      return false;
+    options_.hold = hold;
+    return true;
+  }
+  const Hold<Scalar>& hold() const noexcept { return options_.hold; }
+
+  /// The terms of the last evaluation of the law (A, f, Q, D, g, e, e': at the measured state, or
+  /// with a hold at the predicted one).
   const Terms& terms() const noexcept { return terms_; }
 
-  /// Control force for state (q [m], qd [m/s], t [s]).
+  /// Control force for state (q [m], qd [m/s], t [s]): eq. (32) at that state, or with a hold
+  /// (set_hold) the force to hold over [t + delay, t + delay + period]. The output's
+  /// constraint_error and constraint_error_rate are the measured state's in both cases.
   template <typename Dq, typename Dqd>
   Status compute(const Eigen::MatrixBase<Dq>& q, const Eigen::MatrixBase<Dqd>& qd, Scalar t,
                  Output& out) noexcept {
@@ -139,6 +180,39 @@ class TrackingController {
     }
     const VectorN qv = q;
     const VectorN qdv = qd;
+    const Status measured = evaluate(qv, qdv, t, out);
+    if (!options_.hold.enabled()) return measured;
+    if (failed(measured)) {
+      has_previous_ = false;
+      return measured;
+    }
+    const Scalar tau = options_.hold.lead();
+    const VectorP e = out.constraint_error, e_rate = out.constraint_error_rate;
+    // The jerk from the previous call's acceleration, when that call measured the previous
+    // sample of the same motion (t after it by at most two periods); else none.
+    const VectorN a_k = out.acceleration;
+    VectorN jerk = VectorN::Zero();
+    const Scalar since = t - t_previous_;
+    if (has_previous_ && since > Scalar(0) && since <= Scalar(2) * options_.hold.period)
+      jerk = (a_k - a_previous_) / since;
+    a_previous_ = a_k;
+    t_previous_ = t;
+    has_previous_ = true;
+    const VectorN q_m = qv + tau * qdv + (tau * tau / Scalar(2)) * a_k + (tau * tau * tau / Scalar(6)) * jerk;
+    const VectorN qd_m = qdv + tau * a_k + (tau * tau / Scalar(2)) * jerk;
+    Status status = q_m.allFinite() && qd_m.allFinite() ? evaluate(q_m, qd_m, t + tau, out) : Status::kNonFiniteInput;
+    if (failed(status)) {
+      status = evaluate(qv, qdv, t, out);
+      out.diagnostics.warnings |= warning::kHoldAtMeasuredState;
+    }
+    out.constraint_error = e;
+    out.constraint_error_rate = e_rate;
+    return status;
+  }
+
+ private:
+  // Eq. (32) at (q, q', t) with the stabilization and the force limit.
+  Status evaluate(const VectorN& qv, const VectorN& qdv, Scalar t, Output& out) noexcept {
     evaluate_model(model_, qv, qdv, t, terms_);
     out.constraint_error = terms_.constraint_error;
     out.constraint_error_rate = terms_.constraint_error_rate;
@@ -193,7 +267,6 @@ class TrackingController {
     return status;
   }
 
- private:
   [[noreturn]] static void config_error(const char* problem);
 
   M model_;
@@ -201,6 +274,10 @@ class TrackingController {
   std::array<Stabilization<Scalar>, static_cast<std::size_t>(P)> row_gains_{};
   VectorN force_limit_ = VectorN::Constant(std::numeric_limits<Scalar>::infinity());
   Terms terms_{};
+  // The hold's memory: the previous call's constrained acceleration at its measured state.
+  VectorN a_previous_ = VectorN::Zero();
+  Scalar t_previous_ = Scalar(0);
+  bool has_previous_ = false;
   ConstraintSolver<N, P, Scalar, kMassMatrixOf<M>> solver_;
   ConstraintSolution<N, P, Scalar> solution_;
 };

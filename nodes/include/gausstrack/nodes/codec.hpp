@@ -18,6 +18,8 @@
 namespace gausstrack::nodes {
 
 inline constexpr int kMaxDimension = plant_state_t::MAX_DIMENSION;
+/// The longest hold delay a state may report (plant_state_t::hold_delay_ns) [ns].
+inline constexpr std::int64_t kMaxHoldDelayNs = 1'000'000'000;
 static_assert(control_command_t::MAX_DIMENSION == kMaxDimension &&
               control_diagnostics_t::MAX_DIMENSION == kMaxDimension);
 
@@ -59,6 +61,7 @@ class Codec {
     if (size > static_cast<std::size_t>(INT32_MAX) || msg.decode(data, 0, static_cast<int>(size)) < 0)
       return Refusal::kMalformed;
     if (msg.dimension != n_) return Refusal::kDimension;
+    if (msg.hold_delay_ns < 0 || msg.hold_delay_ns > kMaxHoldDelayNs) return Refusal::kMalformed;
     if (!std::isfinite(msg.t)) return Refusal::kNonFinite;
     q = Eigen::Map<const Vector>(msg.q, n_);
     qd = Eigen::Map<const Vector>(msg.qd, n_);

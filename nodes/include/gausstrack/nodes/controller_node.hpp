@@ -59,6 +59,7 @@ class ControllerNode {
  public:
   static constexpr int N = M::kDof;
   using Controller = TrackingController<M>;
+  using Scalar = typename Controller::Scalar;
 
   /// `compute_times`: how many compute times to keep for percentiles (later ones are counted
   /// only). `diagnostics`: where to publish each command's diagnostics, or nullptr.
@@ -68,6 +69,11 @@ class ControllerNode {
         compute_ns_(compute_times) {
     ended_runs_.fill(INT64_MIN);
   }
+
+  /// With a sampled-data hold (the controller's hold period > 0): take the hold's delay from each
+  /// state (plant_state_t::hold_delay_ns, what the plant measured), or keep the controller's own
+  /// (a configured delay). Default: from the states.
+  void use_measured_delay(bool measured) noexcept { measured_delay_ = measured; }
 
   /// From now on accepts only states that verify with `states` (the state channel's
   /// authentication, which must outlive the node).
@@ -103,6 +109,12 @@ class ControllerNode {
     if (state_.sequence < last_sequence_) return refuse(counts_.stale);
     last_sequence_ = state_.sequence;
 
+    if (measured_delay_ && controller_.hold().period > 0) {
+      // The hold's delay as the plant measured it: the law is evaluated for when its force acts.
+      Hold<Scalar> hold = controller_.hold();
+      hold.delay = static_cast<Scalar>(static_cast<double>(state_.hold_delay_ns) * 1e-9);
+      controller_.set_hold(hold);
+    }
     const std::int64_t start = monotonic_ns();
     const Status status = controller_.compute(q_, qd_, state_.t, out_);
     const std::int64_t compute_ns = monotonic_ns() - start;
@@ -156,6 +168,7 @@ class ControllerNode {
   typename Codec<N>::Vector q_, qd_;
   std::array<std::uint8_t, kMessageBufferBytes> buffer_{}, last_command_{};
   int last_bytes_ = 0;
+  bool measured_delay_ = true;
   std::array<std::int64_t, 8> ended_runs_{};  ///< the last runs that ended (INT64_MIN: none)
   std::int64_t run_id_ = 0, last_sequence_ = -1;
   ControllerCounts counts_;

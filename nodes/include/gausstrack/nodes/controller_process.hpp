@@ -57,6 +57,7 @@ int run_controller(const ControllerProcessOptions& o, const tracking::TrackingSp
   Outbox diagnostics(lcm, p.diagnostics_channel, o.diagnostics ? log.get() : nullptr, p.log_wait);
   Outbox stats_outbox(lcm, p.stats_channel, log.get(), true);
   ControllerNode<M> node(tracking::make_controller<M>(spec, defaults), commands, o.diagnostics ? &diagnostics : nullptr);
+  node.use_measured_delay(!spec.delay_configured);
   if (auth.enabled()) node.authenticate(*auth.states);
   lcm.subscribe(p.state_channel, &ControllerNode<M>::on_state, &node);
   std::printf("gausstrack-controller: ready (%s, %d coordinates, %d constraint rows, %s)\n", spec.model.c_str(),

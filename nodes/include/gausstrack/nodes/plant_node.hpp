@@ -184,6 +184,8 @@ class PlantNode {
       for (int i = 0; i < kMaxPerPeriod && lcm_.handleTimeout(0) > 0; ++i) {
       }
       if (answered_ > last_applied_) {
+        // Applied from this period on: the lag the controller's hold is told (hold_delay_ns).
+        hold_delay_ns_ = (period - answered_) * scheduler_.period_ns();
         last_applied_ = answered_;
         watchdog_.feed(now);
         ++counts_.commands_applied;
@@ -349,6 +351,7 @@ class PlantNode {
     state_.sequence = period;
     state_.run_id = run_id_;
     state_.t = t;
+    state_.hold_delay_ns = o_.lockstep ? 0 : hold_delay_ns_;
     state_bytes_ = codec_.encode_state(state_, Eigen::Map<const Eigen::VectorXd>(q.data(), n),
                                        Eigen::Map<const Eigen::VectorXd>(qd.data(), n), buffer_.data(),
                                        buffer_.size());
@@ -396,6 +399,7 @@ class PlantNode {
   int state_bytes_ = 0;
   std::array<std::int64_t, 4096> published_at_{};  ///< wall clock [ns] each state was sent
   std::int64_t awaited_ = -1, answered_ = -1, last_published_ = -1, last_applied_ = -1;
+  std::int64_t hold_delay_ns_ = 0;
   PlantCounts counts_;
   LatencyRecorder round_trip_us_, compute_ns_, answered_sequences_, deadline_work_us_;
 };

@@ -29,6 +29,14 @@ struct ModelParameter {
   std::string where;  ///< "file:line: dotted.key"
 };
 
+/// How a sampled controller chooses the force it holds over a period (TrackingController's Hold).
+enum class HoldLaw {
+  kMidpoint,  ///< the law at the middle of the hold interval, at the state predicted there
+  kSample,    ///< the law at the measured state (first order in the period)
+};
+constexpr const char* to_string(HoldLaw h) noexcept { return h == HoldLaw::kMidpoint ? "midpoint" : "sample"; }
+inline constexpr HoldLaw kHoldLaws[] = {HoldLaw::kMidpoint, HoldLaw::kSample};
+
 /// The tracking task: the controller's own model of the plant (which may differ from the plant
 /// on purpose), its parameters (the trajectory's included) and how the law is computed.
 struct TrackingSpec {
@@ -42,6 +50,15 @@ struct TrackingSpec {
   double force_limit = std::numeric_limits<double>::infinity();
   /// SolverOptions::min_singular_value: the physical-scale near-singularity floor (0: off).
   double min_singular_value = 0;
+  /// Sampled control: the control period [s] (1 / control.rate of a scene whose control.mode is
+  /// sampled; 0: continuous control, no hold), the hold law (tracking.hold) and the delay from the
+  /// measurement to the force's application the controller assumes (tracking.delay) [s].
+  double period = 0;
+  HoldLaw hold = HoldLaw::kMidpoint;
+  double delay = 0;
+  /// tracking.delay was given: a controller process keeps it instead of the delay the plant
+  /// reports with each state.
+  bool delay_configured = false;
 
   /// The value of a parameter the configuration sets, or `fallback`.
   double parameter(const std::string& name, double fallback) const {
