@@ -30,10 +30,12 @@
 #include <Eigen/Dense>
 #include <boost/numeric/odeint.hpp>
 #include <boost/numeric/odeint/external/eigen/eigen.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <iterator>
 #include <fstream>
 #include <random>
@@ -360,22 +362,25 @@ void strategies(std::ofstream& csv, bool quick) {
 Scene duffing_scene(const fs::path& dir) { return plant_sim::load_scene((dir / "duffing_alpha4.yaml").string()); }
 
 void control_rate(const fs::path& dir, std::ofstream& csv, bool quick) {
-  csv << "rate_hz,stabilization_omega,max_tracking_error,rms_tracking_error,control_evaluations,wall_s\n";
+  csv << "rate_hz,stabilization_omega,hold,max_tracking_error,rms_tracking_error,control_evaluations,wall_s\n";
   for (double rate : {100.0, 200.0, 500.0, 1000.0, 2000.0, 5000.0, 10000.0}) {
     if (quick && rate != 1000.0) continue;
     for (double omega : {0.0, 20.0}) {
-      Scene s = duffing_scene(dir);
-      if (quick) s.duration = 1.0;
-      s.control_mode = plant_sim::ControlMode::kSampled;
-      s.control_rate = rate;
-      s.tracking.zeta = 1.0;
-      s.tracking.stabilization_omega = omega;
-      const RunResult run = plant_sim::run_scene(s);
-      char line[256];
-      std::snprintf(line, sizeof line, "%g,%g,%.6g,%.6g,%llu,%.6g\n", rate, omega, run.summary.max_tracking_error,
-                    run.summary.rms_tracking_error,
-                    static_cast<unsigned long long>(run.summary.control_evaluations), run.summary.wall_time_s);
-      csv << line;
+      for (tracking::HoldLaw hold : tracking::kHoldLaws) {
+        Scene s = duffing_scene(dir);
+        if (quick) s.duration = 1.0;
+        s.control_mode = plant_sim::ControlMode::kSampled;
+        s.control_rate = rate;
+        s.tracking.zeta = 1.0;
+        s.tracking.stabilization_omega = omega;
+        s.tracking.hold = hold;
+        const RunResult run = plant_sim::run_scene(s);
+        char line[256];
+        std::snprintf(line, sizeof line, "%g,%g,%s,%.6g,%.6g,%llu,%.6g\n", rate, omega, tracking::to_string(hold),
+                      run.summary.max_tracking_error, run.summary.rms_tracking_error,
+                      static_cast<unsigned long long>(run.summary.control_evaluations), run.summary.wall_time_s);
+        csv << line;
+      }
     }
   }
   std::printf("  control rate: 100 Hz to 10 kHz\n");
@@ -443,10 +448,13 @@ void projection(const fs::path& dir, std::ofstream& csv, bool quick) {
 int main(int argc, char** argv) {
   fs::path scene_dir, out;
   bool quick = false;
+  std::vector<std::string> only;
   CLI::App app("What accuracy costs: integrators, strategies, control rates and stabilization gains on the scenes.");
   app.add_option("scene_dir", scene_dir, "the scenes (plant_sim/scenes)")->required()->check(CLI::ExistingDirectory);
   app.add_option("out_dir", out, "where the CSVs and tables go")->required();
   app.add_flag("--quick", quick, "a short run of every part (for the tests)");
+  app.add_option("--only", only, "run these parts alone")
+      ->check(CLI::IsMember({"integrators", "peer", "strategies", "control_rate", "stabilization", "projection"}));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -465,29 +473,19 @@ int main(int argc, char** argv) {
       if (!f) throw std::runtime_error("cannot write " + (out / name).string());
       return f;
     };
-    {
-      auto f = open("integrators.csv");
-      integrators(scenes, f, quick);
-    }
-    {
-      auto f = open("peer.csv");
-      peer(f, quick);
-    }
-    {
-      auto f = open("strategies.csv");
-      strategies(f, quick);
-    }
-    {
-      auto f = open("control_rate.csv");
-      control_rate(scene_dir, f, quick);
-    }
-    {
-      auto f = open("stabilization.csv");
-      stabilization(scene_dir, f, quick);
-    }
-    {
-      auto f = open("projection.csv");
-      projection(scene_dir, f, quick);
+    // Each part writes its CSV (NAME.csv).
+    const std::pair<const char*, std::function<void(std::ofstream&)>> parts[] = {
+        {"integrators", [&](std::ofstream& f) { integrators(scenes, f, quick); }},
+        {"peer", [&](std::ofstream& f) { peer(f, quick); }},
+        {"strategies", [&](std::ofstream& f) { strategies(f, quick); }},
+        {"control_rate", [&](std::ofstream& f) { control_rate(scene_dir, f, quick); }},
+        {"stabilization", [&](std::ofstream& f) { stabilization(scene_dir, f, quick); }},
+        {"projection", [&](std::ofstream& f) { projection(scene_dir, f, quick); }},
+    };
+    for (const auto& [name, run] : parts) {
+      if (!only.empty() && std::find(only.begin(), only.end(), name) == only.end()) continue;
+      auto f = open((std::string(name) + ".csv").c_str());
+      run(f);
     }
     std::printf("accuracy_vs_time: %.1f s -> %s\n", seconds_since(t0), out.c_str());
     return 0;

@@ -128,6 +128,22 @@ void bench_law(benchmark::State& state, InverseStrategy strategy, bool reuse = t
   });
 }
 
+/// The law with a sampled-data hold of 1 ms (docs/sampled_law.md): two evaluations per call, the
+/// second at the predicted state. Consecutive states 1 ms apart, so that the jerk term is used.
+template <typename M>
+void bench_law_held(benchmark::State& state) {
+  static const States<M> s;
+  TrackingController<M> controller(M{}, {});
+  controller.set_hold({1e-3, 0.0});
+  typename TrackingController<M>::Output out;
+  double t = 0;
+  measure(state, [&](std::size_t k) {
+    t += 1e-3;
+    benchmark::DoNotOptimize(controller.compute(s.q[k], s.qd[k], t, out));
+    benchmark::DoNotOptimize(out.force.data());
+  });
+}
+
 template <typename M>
 void bench_literal_fixed(benchmark::State& state) {
   static const States<M> s;
@@ -311,6 +327,7 @@ void register_model(const std::string& name) {
   constexpr auto kDefault = InverseStrategy::kCholeskyWithFallback;
   benchmark::RegisterBenchmark(("law/" + size + "/cholesky_refactor").c_str(),
                                [](benchmark::State& st) { bench_law<M>(st, kDefault, false); });
+  benchmark::RegisterBenchmark(("law/" + size + "/cholesky_held").c_str(), bench_law_held<M>);
   if constexpr (kMassMatrixOf<M> != MassMatrix::kDense)
     benchmark::RegisterBenchmark(("law/" + size + "/cholesky_dense_refactor").c_str(),
                                  [](benchmark::State& st) { bench_law<DenseMass<M>>(st, kDefault, false); });

@@ -203,7 +203,12 @@ Control::Control(const Scene& s, const RunOptions& o) {
     throw SceneError(s.tracking.where + ": model '" + s.tracking.model + "' has " + std::to_string(model.dof) +
                      " coordinates, the plant has " + std::to_string(s.dof()));
   if (o.sampled_control) error_ = model.tracking_error(s.tracking);
-  else law_ = model.control_law(s.tracking);
+  else {
+    // A sampled controller holds its force over the scene's control period.
+    TrackingSpec spec = s.tracking;
+    spec.period = s.control_mode == ControlMode::kSampled ? 1.0 / s.control_rate : 0.0;
+    law_ = model.control_law(spec);
+  }
 }
 
 void Control::force(const V& q, const V& qd, double t, RunSummary& stats, V& u) {

@@ -369,7 +369,6 @@ Scene read_scene(const Reader& root) {
       root.child("tracking").fail("tracking control of a plant with physical constraints is not supported");
   }
   read_control(root, s);
-  if (s.tracking.enabled && s.control_mode == ControlMode::kSampled) s.tracking.period = 1.0 / s.control_rate;
   read_time_grid(root, s);
   read_integrator(root, s);
   check_periods(root, s);

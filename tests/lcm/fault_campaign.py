@@ -110,8 +110,8 @@ ATTACKS = [
           refused=dict(unauthenticated=10000))),
     ("controller holding another key", "wrong key",
      "the plant applies nothing and ends the run at its timeout saying why (exit 1); the controller counts "
-     "the plant's states as bad tags",
-     dict(refuses_to_run=True, controller_refused=dict(bad_tag=100))),
+     "the plant's first state, sent every 100 ms until then, as bad tags",
+     dict(refuses_to_run=True, controller_refused=dict(bad_tag=10))),
 ]
 
 

@@ -426,6 +426,28 @@ TEST_F(PlantFixture, LockstepAppliesTheAnswerAndZeroForAFailedSolve) {
   EXPECT_EQ(node.counts().commands_failed, 1);
 }
 
+// The hold's delay each state reports (what the controller's sampled-data hold predicts over):
+// none in lock-step; in real time none for the first state (its answer is awaited), then the
+// period (an answer acts from the next period), as measured from the applied commands.
+TEST_F(PlantFixture, StatesReportTheDelayWithWhichAnswersAreApplied) {
+  for (bool lockstep : {true, false}) {
+    PlantNode node(lcm, states, "CMD", 2, options(lockstep));
+    std::vector<std::int64_t> delays;
+    fake.reply = [&](const plant_state_t& s, control_command_t& c) {
+      delays.push_back(s.hold_delay_ns);
+      c.force[0] = 1.0;
+    };
+    const std::array<double, 2> q{0, 0}, qd{0, 0};
+    std::array<double, 2> u{};
+    for (int k = 0; k < 4; ++k) ASSERT_TRUE(node.exchange(k, 0.005 * k, q, qd, u));
+    const std::int64_t period = lockstep ? 0 : 5'000'000;  // 200 Hz
+    // In real time the last state's answer comes after the loop.
+    ASSERT_GE(delays.size(), 3u);
+    for (std::size_t k = 0; k < delays.size(); ++k)
+      EXPECT_EQ(delays[k], k == 0 ? 0 : period) << (lockstep ? "lock-step" : "real time") << ", state " << k;
+  }
+}
+
 TEST_F(PlantFixture, CommandsOfAnotherRunAreRefused) {
   PlantNode node(lcm, states, "CMD", 2, options(true));
   fake.reply = [](const plant_state_t&, control_command_t& c) {
@@ -455,9 +477,10 @@ TEST_F(PlantFixture, RealTimeHoldsTheNewestAnswerAndNeverAFailedOnesPredecessor)
     ASSERT_TRUE(node.exchange(k, 0.005 * k, q, qd, u));
     applied.push_back(u[0]);
   }
-  // Period 0 has no answer yet (zero); period k applies the answer to state k - 1; state 2's
-  // answer failed, so period 3 applies zero, not state 1's force.
-  EXPECT_EQ(applied, (std::vector<double>{0.0, 10.0, 11.0, 0.0, 13.0}));
+  // Period 0 waits for the answer to state 0 and applies it; period 1 has no new answer and holds
+  // it; period k > 1 applies the answer to state k - 1; state 2's answer failed, so period 3
+  // applies zero, not state 1's force.
+  EXPECT_EQ(applied, (std::vector<double>{10.0, 10.0, 11.0, 0.0, 13.0}));
   EXPECT_EQ(node.counts().commands_missing, 1);
   EXPECT_EQ(node.counts().commands_failed, 1);
   EXPECT_EQ(node.counts().states_published, 5);

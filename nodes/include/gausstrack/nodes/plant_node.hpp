@@ -5,8 +5,10 @@
 // - Lock-step: waits for the command answering that state (deterministic; for tests and studies),
 //   publishing the state again every 100 ms meanwhile, so that one lost datagram costs a resend,
 //   not the run.
-// - Real time: periods start on absolute deadlines (PeriodScheduler); the plant never waits for
-//   a command. Between deadlines it services LCM; round trips are measured from the state's
+// - Real time: periods start on absolute deadlines (PeriodScheduler); past the first state the
+//   plant never waits for a command. The first state's answer is awaited as in lock-step (up to
+//   the timeout) and the clock starts when it comes, so that a run does not begin with a period
+//   of no force. Between deadlines it services LCM; round trips are measured from the state's
 //   publication to the kernel's receive timestamp of the command (LCM's recv_utime). At
 //   each period it applies the newest valid command (zero-order hold: the command answering state
 //   k is applied from period k + 1); when none has come for longer than the watchdog time it
@@ -176,6 +178,7 @@ class PlantNode {
       scheduler_.restart(now);
       watchdog_.feed(now);
     }
+    if (!o_.lockstep && counts_.states_published == 0) return start_real_time(period, t, q, qd, u);
     if (!o_.lockstep) {
       // Until this period's deadline take commands as they come; then wake exactly at it, apply
       // the newest command and publish the state.
@@ -193,9 +196,6 @@ class PlantNode {
       } else {
         ++counts_.commands_missing;
         if (watchdog_.check(now) && !o_.safe_hold) hold_.setZero();
-        if (auth_ && counts_.commands_applied == 0 &&
-            now - scheduler_.deadline(0) > static_cast<std::int64_t>(o_.timeout_ms) * 1000000)
-          return refuse_to_run("in real time");
       }
       for (int i = 0; i < n; ++i) u[static_cast<std::size_t>(i)] = hold_(i);
       awaited_ = period;
@@ -204,20 +204,8 @@ class PlantNode {
       deadline_work_us_.add(static_cast<double>(monotonic_ns() - now) * 1e-3);
       return true;
     }
-    awaited_ = period;
-    exact_ = true;
-    ready_ = false;
-    publish_state(period, t, q, qd);
-    const std::int64_t give_up = monotonic_ns() + static_cast<std::int64_t>(o_.timeout_ms) * 1000000;
-    for (;;) {
-      const std::int64_t resend = std::min(give_up, monotonic_ns() + kResendNs);
-      service_until(resend, [&] { return ready_ || g_stop_requested != 0; });
-      if (ready_ || g_stop_requested || monotonic_ns() >= give_up) break;
-      ++counts_.states_resent;
-      send_state();
-    }
-    if (g_stop_requested) return false;
-    if (!ready_) {
+    if (!await_answer(period, t, q, qd)) {
+      if (g_stop_requested) return false;
       ++counts_.commands_missing;
       if (auth_ && counts_.commands_applied == 0) return refuse_to_run("in lock-step");
       std::fprintf(stderr,
@@ -229,6 +217,51 @@ class PlantNode {
     }
     ++counts_.commands_applied;
     for (int i = 0; i < n; ++i) u[static_cast<std::size_t>(i)] = latest_failed_ ? 0.0 : latest_force_(i);
+    return true;
+  }
+
+  // Publishes the state of `period` and waits for the command answering it (resending the state
+  // every 100 ms) up to the timeout. True when it came.
+  bool await_answer(std::int64_t period, double t, std::span<const double> q, std::span<const double> qd) noexcept {
+    awaited_ = period;
+    exact_ = true;
+    ready_ = false;
+    publish_state(period, t, q, qd);
+    const std::int64_t give_up = monotonic_ns() + static_cast<std::int64_t>(o_.timeout_ms) * 1000000;
+    for (;;) {
+      const std::int64_t resend = std::min(give_up, monotonic_ns() + kResendNs);
+      service_until(resend, [&] { return ready_ || g_stop_requested != 0; });
+      if (ready_ || g_stop_requested || monotonic_ns() >= give_up) return ready_ && !g_stop_requested;
+      ++counts_.states_resent;
+      send_state();
+    }
+  }
+
+  // Real time, the first state: its answer is awaited as in lock-step, and the periodic clock
+  // starts when it comes, so that the run does not begin with a period of no force (the
+  // controller's first answer takes a round trip). Without an answer within the timeout the clock
+  // starts anyway, with the safe action (an authenticated plant ends the run instead).
+  bool start_real_time(std::int64_t period, double t, std::span<const double> q, std::span<const double> qd,
+                       std::span<double> u) noexcept {
+    const bool answered = await_answer(period, t, q, qd);
+    if (g_stop_requested) return false;
+    const std::int64_t now = monotonic_ns();
+    scheduler_.restart(now - scheduler_.period_ns() * period);
+    exact_ = false;
+    hold_.setZero();
+    if (answered) {
+      watchdog_.feed(now);
+      ++counts_.commands_applied;
+      last_applied_ = answered_;
+      if (!latest_failed_) hold_ = latest_force_;
+      // Applied at once, as in lock-step; the answers to the next states act a period later at
+      // the soonest, which their states report until an applied command measures the lag.
+      hold_delay_ns_ = scheduler_.period_ns();
+    } else {
+      ++counts_.commands_missing;
+      if (auth_) return refuse_to_run("in real time");
+    }
+    for (int i = 0; i < codec_.dimension(); ++i) u[static_cast<std::size_t>(i)] = hold_(i);
     return true;
   }
 
