@@ -7,6 +7,8 @@
 //   kArm         TrackingController<PlanarArm>: the three-link arm's hand on its circle, written as
 //                phi(q, t), 3 x 2, stabilization zeta 1, omega 20
 //   kClosedForm  the hand-derived Duffing force (bench/controller/duffing_closed_form.hpp), the floor
+//   kDuffingHeld, kArmHeld  the same laws with the sampled-data hold of one period (the force held
+//                over the period is the law's at its middle: docs/sampled_law.md)
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -21,14 +23,19 @@
 
 namespace firmware {
 
-enum class Law { kDuffing, kArm, kClosedForm };
+enum class Law { kDuffing, kArm, kClosedForm, kDuffingHeld, kArmHeld };
+
+template <Law L>
+constexpr bool is_arm() {
+  return L == Law::kArm || L == Law::kArmHeld;
+}
 
 inline constexpr int kPeriods = 10000;  // 10 s at 1 kHz
 inline constexpr double kPeriod = 1e-3;  // [s]
 
 template <Law L>
 constexpr int dof() {
-  return L == Law::kArm ? 3 : 2;
+  return is_arm<L>() ? 3 : 2;
 }
 
 /// One law and its plant, in scalar type S.
@@ -37,11 +44,11 @@ class Loop {
  public:
   static constexpr int N = dof<L>();
   using Vector = Eigen::Matrix<S, N, 1>;
-  using Model = std::conditional_t<L == Law::kArm, gausstrack::systems::PlanarArm<S>,
+  using Model = std::conditional_t<is_arm<L>(), gausstrack::systems::PlanarArm<S>,
                                    gausstrack::systems::CoupledDuffing<S>>;
 
   Loop() {
-    if constexpr (L == Law::kArm) {
+    if constexpr (is_arm<L>()) {
       q_ << S(0.2), S(0.9), S(0.6);
       qd_.setZero();
       gausstrack::make_consistent(model_, q_, qd_, S(0), S(1e-6));
@@ -94,6 +101,7 @@ class Loop {
     static gausstrack::ControllerOptions<S> options() {
       gausstrack::ControllerOptions<S> o;
       o.stabilization = {S(1), S(20)};
+      if constexpr (L == Law::kDuffingHeld || L == Law::kArmHeld) o.hold = {S(kPeriod), S(0)};
       return o;
     }
     gausstrack::TrackingController<Model> controller{Model{}, options()};
@@ -105,7 +113,7 @@ class Loop {
   void acceleration(const Vector& q, const Vector& qd, const Vector& u, S t, Vector& qdd) {
     model_.evaluate(q, qd, t, terms_);
     const Vector rhs = terms_.applied_force + u - terms_.nonlinear_force;
-    if constexpr (L == Law::kArm) {
+    if constexpr (is_arm<L>()) {
       qdd = terms_.mass_matrix.llt().solve(rhs);
     } else {
       qdd = rhs.cwiseQuotient(terms_.mass_matrix.diagonal());
