@@ -127,8 +127,9 @@ bool Run::hold_force(std::int64_t period, double t0) {
   plant_.measure(measured_q_, measured_qd_, stats_);
   if (o_.sampled_control) {
     held_.setZero();
-    if (!o_.sampled_control(period, t0, std::span<const double>(measured_q_.data(), n_),
-                            std::span<const double>(measured_qd_.data(), n_), std::span<double>(held_.data(), n_))) {
+    const auto n = static_cast<std::size_t>(n_);
+    if (!o_.sampled_control(period, t0, std::span<const double>(measured_q_.data(), n),
+                            std::span<const double>(measured_qd_.data(), n), std::span<double>(held_.data(), n))) {
       stats_.stopped_early = true;
       return false;
     }

@@ -87,6 +87,30 @@ TEST(SampledHold, NextSampleAddsTheJerkFromThePreviousAcceleration) {
     EXPECT_NEAR(out.force(i), no_jerk.force(i), 1e-12 * (1 + std::abs(no_jerk.force(i))));
 }
 
+// A call repeated for the same sample (a firmware loop that repeats a call a clock jump cut
+// short) answers as the first did: the memory keeps the sample before it.
+TEST(SampledHold, ARepeatedCallAnswersAsTheFirst) {
+  const double h = 1e-3;
+  TrackingController<Duffing> held(Duffing{}, stabilized());
+  ASSERT_TRUE(held.set_hold({h, 0.0}));
+  TrackingController<Duffing>::Output first, again;
+  ASSERT_EQ(held.compute(kQ, kQd, 0.3, first), Status::kOk);
+  const V2 q1 = kQ + h * kQd;
+  ASSERT_EQ(held.compute(q1, kQd, 0.3 + h, first), Status::kOk);
+  ASSERT_EQ(held.compute(q1, kQd, 0.3 + h, again), Status::kOk);
+  EXPECT_EQ(first.force, again.force);
+  // The next sample still sees the jerk from the one before it (not from a repeat): as a fresh
+  // controller fed the same two samples.
+  TrackingController<Duffing> fresh(Duffing{}, stabilized());
+  ASSERT_TRUE(fresh.set_hold({h, 0.0}));
+  TrackingController<Duffing>::Output a, b;
+  const V2 q2 = q1 + h * kQd;
+  ASSERT_EQ(held.compute(q2, kQd, 0.3 + 2 * h, a), Status::kOk);
+  ASSERT_EQ(fresh.compute(q1, kQd, 0.3 + h, b), Status::kOk);
+  ASSERT_EQ(fresh.compute(q2, kQd, 0.3 + 2 * h, b), Status::kOk);
+  EXPECT_EQ(a.force, b.force);
+}
+
 TEST(SampledHold, AVanishingHoldGivesThePlainLawAtFirstOrder) {
   const auto plain = plain_at(kQ, kQd, 0.3);
   double previous = 0;

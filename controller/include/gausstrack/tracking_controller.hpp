@@ -32,8 +32,7 @@ struct Stabilization {
 /// constraints to first order in the period; with a hold the controller evaluates the law at the
 /// middle of the hold interval instead, t_m = t + delay + period / 2, at the state predicted
 /// there through the constrained acceleration q'' it computes at t and the jerk j from the
-/// previous call's q'' (when that call measured the previous sample, at most two periods
-/// earlier; else j = 0):
+/// previous sample's q'' (at most two periods earlier; else j = 0):
 ///   q_m = q + tau q' + tau^2 / 2 q'' + tau^3 / 6 j,  q'_m = q' + tau q'' + tau^2 / 2 j,
 ///   tau = delay + period / 2,
 /// so that the held force is the continuous law's at the interval's midpoint and the constraints
@@ -151,7 +150,7 @@ class TrackingController {
   const VectorN& force_limit() const noexcept { return force_limit_; }
 
   /// The sampled-data hold. Returns false, changing nothing, unless period and delay are finite
-  /// and >= 0. The hold's memory (the previous call's acceleration) is kept: it is used only for
+  /// and >= 0. The hold's memory (the latest samples' accelerations) is kept: it is used only for
   /// a call that follows it by at most two periods.
   bool set_hold(const Hold<Scalar>& hold) noexcept {
     if (!std::isfinite(hold.period) || !(hold.period >= Scalar(0)) || !std::isfinite(hold.delay) ||
@@ -183,21 +182,27 @@ class TrackingController {
     const Status measured = evaluate(qv, qdv, t, out);
     if (!options_.hold.enabled()) return measured;
     if (failed(measured)) {
-      has_previous_ = false;
+      has_latest_ = has_previous_ = false;
       return measured;
     }
     const Scalar tau = options_.hold.lead();
     const VectorP e = out.constraint_error, e_rate = out.constraint_error_rate;
-    // The jerk from the previous call's acceleration, when that call measured the previous
-    // sample of the same motion (t after it by at most two periods); else none.
+    // The jerk from the acceleration of the previous sample of the same motion (at most two
+    // periods earlier); else none. A call for the same t again (a repeated call) keeps the
+    // previous sample, so that it answers as the first did; an earlier t starts a new motion.
     const VectorN a_k = out.acceleration;
+    if (!has_latest_ || t != t_latest_) {
+      has_previous_ = has_latest_ && t > t_latest_;
+      a_previous_ = a_latest_;
+      t_previous_ = t_latest_;
+    }
+    a_latest_ = a_k;
+    t_latest_ = t;
+    has_latest_ = true;
     VectorN jerk = VectorN::Zero();
     const Scalar since = t - t_previous_;
     if (has_previous_ && since > Scalar(0) && since <= Scalar(2) * options_.hold.period)
       jerk = (a_k - a_previous_) / since;
-    a_previous_ = a_k;
-    t_previous_ = t;
-    has_previous_ = true;
     const VectorN q_m = qv + tau * qdv + (tau * tau / Scalar(2)) * a_k + (tau * tau * tau / Scalar(6)) * jerk;
     const VectorN qd_m = qdv + tau * a_k + (tau * tau / Scalar(2)) * jerk;
     Status status = q_m.allFinite() && qd_m.allFinite() ? evaluate(q_m, qd_m, t + tau, out) : Status::kNonFiniteInput;
@@ -274,10 +279,11 @@ class TrackingController {
   std::array<Stabilization<Scalar>, static_cast<std::size_t>(P)> row_gains_{};
   VectorN force_limit_ = VectorN::Constant(std::numeric_limits<Scalar>::infinity());
   Terms terms_{};
-  // The hold's memory: the previous call's constrained acceleration at its measured state.
-  VectorN a_previous_ = VectorN::Zero();
-  Scalar t_previous_ = Scalar(0);
-  bool has_previous_ = false;
+  // The hold's memory: the constrained acceleration at the latest sample's measured state, and at
+  // the sample before it.
+  VectorN a_latest_ = VectorN::Zero(), a_previous_ = VectorN::Zero();
+  Scalar t_latest_ = Scalar(0), t_previous_ = Scalar(0);
+  bool has_latest_ = false, has_previous_ = false;
   ConstraintSolver<N, P, Scalar, kMassMatrixOf<M>> solver_;
   ConstraintSolution<N, P, Scalar> solution_;
 };
