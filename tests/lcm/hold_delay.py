@@ -5,7 +5,10 @@ held (tracking.hold: sample) and once with the held midpoint law, whose controll
 the delay the plant reports (plant_state_t.hold_delay_ns). The midpoint law's median tracking
 error must be at least 10x smaller. The median, not the largest error: on a shared machine the
 largest error is set by the machine's stalls (tens of milliseconds without CPU), the same for
-both laws.
+both laws. A pair of runs that misses the ratio while the machine held either run back (the
+plant woke more than 10 ms late, the fault campaign's rule, or more than a tenth of its periods
+had no fresh command: the law is judged where its commands arrive) is run once more, and says
+so.
 
 usage: hold_delay.py BIN_DIR TEST_BIN_DIR SCENE OUT_DIR
 """
@@ -62,18 +65,28 @@ def run(hold, port, bin_dir, test_bin, scene, out):
     errors = sorted(abs(float(r["tracking_error"])) for r in csv.DictReader(open(os.path.join(work, "plant",
                                                                                           "trajectory.csv"))))
     median = errors[len(errors) // 2]
+    stall_ms = s["wake_late_us"]["max"] / 1e3
+    missing = s["commands_missing"] / s["states_published"]
     print(f"{hold}: median error {median:.3g}, max {s['max_tracking_error']:.3g}, round trip p50 "
           f"{s['round_trip_us']['p50']:.0f} us, applied {s['commands_applied']} of {s['states_published']}, "
-          f"deadline misses {s['deadline_misses']}", flush=True)
-    return median
+          f"deadline misses {s['deadline_misses']}, latest wake {stall_ms:.1f} ms late", flush=True)
+    return median, stall_ms > 10 or missing > 0.1
 
 
 def main(bin_dir, test_bin, scene, out):
-    sample = run("sample", 7790, bin_dir, test_bin, scene, out)
-    midpoint = run("midpoint", 7792, bin_dir, test_bin, scene, out)
-    ratio = sample / midpoint if midpoint > 0 else float("inf")
-    print(f"hold_delay: the midpoint law's median error is {ratio:.0f}x smaller (expected >= 10x)")
-    return 0 if ratio >= 10 else 1
+    for attempt in (1, 2):
+        sample, held_back_a = run("sample", 7790, bin_dir, test_bin, scene, out)
+        midpoint, held_back_b = run("midpoint", 7792, bin_dir, test_bin, scene, out)
+        ratio = sample / midpoint if midpoint > 0 else float("inf")
+        print(f"hold_delay: the midpoint law's median error is {ratio:.0f}x smaller (expected >= 10x)")
+        if ratio >= 10:
+            return 0
+        if attempt == 1 and (held_back_a or held_back_b):
+            print("hold_delay: the machine held a run back (a stall over 10 ms, or over a tenth of the periods "
+                  "without a fresh command); running the pair again")
+            continue
+        return 1
+    return 1
 
 
 if __name__ == "__main__":
