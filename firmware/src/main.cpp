@@ -74,14 +74,11 @@ int main() {
     std::uint32_t start = board::systick().val;
     gausstrack::Status status = g_loop.control(q, qd, t, u);
     std::uint32_t end = board::systick().val;
-    // A period boundary passed during the call: the period count moved, or the down-counter
-    // reloaded before its interrupt was taken (end above start).
-    const auto boundary_passed = [&] { return board::g_ticks != seen || end > start; };
-    if (boundary_passed()) {
-      // The law overran, or QEMU's virtual clock jumped (with -icount sleep=on it catches up with
-      // the host's clock after semihosting I/O on a busy host). The call answers for the state
-      // (and the previous sample) alone: repeat it in the new period; an overrun repeats, a clock
-      // jump does not.
+    if (board::g_ticks != seen) {
+      // A period boundary passed during the call: the law overran, or QEMU's virtual clock
+      // jumped (with -icount sleep=on it catches up with the host's clock after semihosting I/O
+      // on a busy host). The call is a function of the state alone: repeat it in the new period;
+      // an overrun repeats, a clock jump does not.
       ++clock_jumps;
       seen = board::g_ticks;
       start = board::systick().val;
@@ -89,8 +86,8 @@ int main() {
       end = board::systick().val;
     }
     if (failed(status)) ++failures;
-    if (boundary_passed()) ++overruns;  // the period ended before the force was applied
-    else {
+    if (board::g_ticks != seen) ++overruns;  // the period ended before the force was applied
+    else if (end <= start) {  // (end above start: the counter reloaded, its interrupt not yet taken: no figure)
       const std::uint32_t ticks = start - end;
       max_ticks = ticks > max_ticks ? ticks : max_ticks;
       min_ticks = ticks < min_ticks ? ticks : min_ticks;
