@@ -20,14 +20,7 @@ import subprocess
 import sys
 import time
 
-
-def wait_ready(log, timeout=5.0):
-    end = time.time() + timeout
-    while time.time() < end:
-        if os.path.exists(log) and "ready" in open(log).read():
-            return True
-        time.sleep(0.02)
-    return False
+from fault_campaign import wait_ready  # same directory
 
 
 def run(hold, port, bin_dir, test_bin, scene, out):
