@@ -44,6 +44,7 @@ void PlantNode::add_to_summary(nlohmann::ordered_json& j, long log_dropped) cons
   j["compute_ns"] = percentiles_json(compute_ns_);
   j["wake_late_us"] = o_.lockstep ? nlohmann::ordered_json() : percentiles_json(scheduler_.wake_late_us());
   j["deadline_work_us"] = o_.lockstep ? nlohmann::ordered_json() : percentiles_json(deadline_work_us_);
+  j["hold_lag_periods"] = o_.lockstep ? nlohmann::ordered_json() : percentiles_json(hold_lag_periods_);
 }
 
 namespace {
@@ -82,6 +83,17 @@ void write_latency_csv(const PlantNode& node, const std::string& path) {
   for (std::size_t k = 0; k < seq.size(); ++k)
     csv << static_cast<long long>(seq[k]) << ',' << node.round_trip_us().values()[k] << ','
         << node.compute_ns().values()[k] << '\n';
+  if (!csv) throw std::runtime_error("cannot write " + path);
+}
+
+// Real time: per period, the hold lag and the state whose answer the plant held.
+void write_periods_csv(const PlantNode& node, const std::string& path) {
+  std::ofstream csv(path);
+  csv << "period,hold_lag,applied_state\n";
+  const auto& lag = node.hold_lag_periods().values();
+  const auto& applied = node.applied_states().values();
+  for (std::size_t p = 0; p < lag.size() && p < applied.size(); ++p)
+    csv << p << ',' << static_cast<int>(lag[p]) << ',' << static_cast<long long>(applied[p]) << '\n';
   if (!csv) throw std::runtime_error("cannot write " + path);
 }
 
@@ -136,6 +148,7 @@ int run_plant(const PlantProcessOptions& o, const plant_sim::Scene& scene, plant
   node.add_to_summary(summary, log_dropped);
   write_json(summary, o.out_dir + "/summary.json");
   write_latency_csv(node, o.out_dir + "/latency.csv");
+  if (!o.node.lockstep) write_periods_csv(node, o.out_dir + "/periods.csv");
   print_summary(node, result, stats, o.out_dir);
   if (!result.summary.failure.empty()) {
     std::fprintf(stderr, "error: %s (data up to then written to %s)\n", result.summary.failure.c_str(),

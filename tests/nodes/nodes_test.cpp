@@ -448,6 +448,76 @@ TEST_F(PlantFixture, StatesReportTheDelayWithWhichAnswersAreApplied) {
   }
 }
 
+// In real time the answer to state k acts from period k + L, L one more than the 95th percentile
+// of the round trips in whole periods (HoldLag). With round trips of 2.5 periods each answer waits
+// in the plant for period k + 3 and each state reports 3 periods as its hold delay; an answer
+// that comes after its period is counted late and applied in the next one, and that one round
+// trip of 3.5 periods does not move L. (50 Hz: the test's own scheduling has 10 ms of margin.)
+TEST(PlantHoldLag, AnswersActAFixedLagAfterTheirStates) {
+  lcm::LCM lcm{"memq://"};
+  ASSERT_TRUE(lcm.good());
+  Outbox states{lcm, "STATE", nullptr, false};
+  struct Delays {
+    std::vector<std::int64_t> of_state;
+    void on(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      plant_state_t s{};
+      ASSERT_GE(s.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)), 0);
+      of_state.resize(std::max(of_state.size(), static_cast<std::size_t>(s.sequence) + 1), -1);
+      of_state[static_cast<std::size_t>(s.sequence)] = s.hold_delay_ns;
+    }
+  } delays;
+  lcm.subscribe("STATE", &Delays::on, &delays);
+  PlantNodeOptions o;
+  o.rate_hz = 50;
+  o.timeout_ms = 1;  // the first state goes unanswered
+  o.watchdog_ms = 1000;
+  o.run_id = 4242;
+  o.periods = 64;
+  PlantNode node(lcm, states, "CMD", 2, o);
+  constexpr std::int64_t kPeriod = 20'000'000;
+  auto answer = [&](std::int64_t k, std::int64_t received_ns) {
+    control_command_t c{};
+    c.run_id = 4242;
+    c.state_sequence = k;
+    c.dimension = 2;
+    c.force[0] = static_cast<double>(k);
+    std::vector<std::uint8_t> b(static_cast<std::size_t>(c.getEncodedSize()));
+    c.encode(b.data(), 0, static_cast<int>(b.size()));
+    node.handle_command(b.data(), b.size(), received_ns);
+  };
+  // States 30 to 33 get no answer in time; the answer to 30 comes after period 33 started.
+  const std::array<double, 2> q{0, 0}, qd{0, 0};
+  std::array<double, 2> u{};
+  std::vector<double> applied;
+  for (int p = 0; p < 40; ++p) {
+    ASSERT_TRUE(node.exchange(p, 0.02 * p, q, qd, u));
+    applied.push_back(u[0]);
+    const std::int64_t now = wall_us() * 1000;  // the state went out just before
+    if (p >= 1 && (p < 30 || p > 33)) answer(p, now + 5 * kPeriod / 2);
+    if (p == 33) answer(30, now + kPeriod / 2);
+  }
+  // Period 1 knew no round trip yet (L = 1; state 0 went unanswered); from period 2 on L = 3.
+  for (int p = 0; p < 4; ++p) EXPECT_EQ(applied[static_cast<std::size_t>(p)], 0.0) << "period " << p;
+  for (int p = 4; p < 33; ++p) EXPECT_EQ(applied[static_cast<std::size_t>(p)], p - 3) << "period " << p;
+  EXPECT_EQ(applied[33], 29.0);  // the answer due (30) had not come
+  for (int p = 34; p < 37; ++p) EXPECT_EQ(applied[static_cast<std::size_t>(p)], 30.0) << "period " << p;
+  for (int p = 37; p < 40; ++p) EXPECT_EQ(applied[static_cast<std::size_t>(p)], p - 3) << "period " << p;
+  EXPECT_EQ(node.counts().commands_late, 1);
+  EXPECT_EQ(node.counts().commands_applied, 29 + 1 + 3);
+  ASSERT_GE(delays.of_state.size(), 38u);
+  EXPECT_EQ(delays.of_state[0], 0);
+  EXPECT_EQ(delays.of_state[1], kPeriod);
+  for (std::size_t k = 2; k < delays.of_state.size(); ++k) EXPECT_EQ(delays.of_state[k], 3 * kPeriod) << "state " << k;
+  EXPECT_EQ(node.hold_lag_periods().max(), 3.0);
+  // Each period's held answer: on time while period - state == lag.
+  const auto& held = node.applied_states().values();
+  ASSERT_EQ(held.size(), 40u);
+  EXPECT_EQ(held[32], 29.0);
+  EXPECT_EQ(held[33], 29.0);  // 4 periods old: the answer due was missing
+  EXPECT_EQ(held[34], 30.0);
+  EXPECT_EQ(held[39], 36.0);
+}
+
 TEST_F(PlantFixture, CommandsOfAnotherRunAreRefused) {
   PlantNode node(lcm, states, "CMD", 2, options(true));
   fake.reply = [](const plant_state_t&, control_command_t& c) {
@@ -551,6 +621,26 @@ TEST_F(PlantFixture, WithAKeyAndOnlyUnverifiedAnswersTheRunEnds) {
     EXPECT_EQ(node.counts().commands_applied, 0);
     EXPECT_GE(node.counts().auth.unauthenticated, 1);
   }
+}
+
+// The hold lag is one more than the 95th percentile of the last 256 round trips in whole
+// periods, 1 before any, at most 1 s.
+TEST(HoldLag, FollowsTheRoundTripsPercentileNotItsOutliers) {
+  constexpr std::int64_t kPeriod = 1'000'000;
+  HoldLag lag(kPeriod);
+  EXPECT_EQ(lag.lag(), 1);
+  for (int i = 0; i < 100; ++i) lag.record(kPeriod * 3 / 10);
+  EXPECT_EQ(lag.lag(), 1);
+  lag.record(10 * kPeriod);  // a stall: 2 of 102 round trips
+  lag.record(-5);            // clocks that disagree count as no delay
+  EXPECT_EQ(lag.lag(), 1);
+  for (int i = 0; i < 200; ++i) lag.record(kPeriod * 22 / 10);
+  EXPECT_EQ(lag.lag(), 3);  // the window: 55 under a period, 200 of 2.2 periods, 1 of 10
+  for (int i = 0; i < 20; ++i) lag.record(kPeriod * 5);
+  EXPECT_EQ(lag.lag(), 6);  // now 21 of 256 above 2.2 periods: more than the 5 % allowed
+  HoldLag slow(100'000'000);  // 10 Hz
+  slow.record(5'000'000'000);
+  EXPECT_EQ(slow.lag(), 10);  // 1 s
 }
 
 TEST(Watchdog, TripsOncePerOutageAndClearsOnACommand) {

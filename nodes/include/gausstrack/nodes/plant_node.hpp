@@ -9,10 +9,14 @@
 //   plant never waits for a command. The first state's answer is awaited as in lock-step (up to
 //   the timeout) and the clock starts when it comes, so that a run does not begin with a period
 //   of no force. Between deadlines it services LCM; round trips are measured from the state's
-//   publication to the kernel's receive timestamp of the command (LCM's recv_utime). At
-//   each period it applies the newest valid command (zero-order hold: the command answering state
-//   k is applied from period k + 1); when none has come for longer than the watchdog time it
-//   applies the safe action (zero force, or hold the last one) until commands return.
+//   publication to the kernel's receive timestamp of the command (LCM's recv_utime). The command
+//   answering state k acts from period k + L (zero-order hold), L the hold lag (HoldLag: one more
+//   than the 95th percentile of recent round trips in whole periods; 1 while they are shorter
+//   than a period). Each state reports L periods as its hold_delay_ns, so the controller knows
+//   the interval its answer acts on. An answer that comes before its period waits for it; at
+//   each period the plant applies the answer due, or when it has not come the newest one older
+//   than it (counted late); when none has come for longer than the watchdog time it applies the
+//   safe action (zero force, or hold the last one) until commands return.
 // A command reporting a failed solve is applied as zero force and counted, never ignored in
 // favour of an older force. Commands for another run (a previous plant process) are refused.
 // With the pair's key (authenticate()), a command whose trailer does not verify is counted by
@@ -116,6 +120,46 @@ class Watchdog {
   long trips_ = 0;
 };
 
+/// The lag, in whole periods, with which a real-time plant applies answers: the command answering
+/// the state of period k acts from period k + lag(). The round trips of the last kWindow commands
+/// are kept in whole periods; lag() is one more than their 95th percentile, so that a few answers
+/// held back by a stall do not move it and a delay that lasts does. 1 before any round trip is
+/// known (an answer acts from the next period); at most kMaxLag periods and at most 1 s.
+class HoldLag {
+ public:
+  static constexpr int kMaxLag = 32;
+  static constexpr int kWindow = 256;
+
+  explicit HoldLag(std::int64_t period_ns) noexcept
+      : period_ns_(period_ns), longest_(static_cast<int>(std::clamp<std::int64_t>(
+                                   1'000'000'000 / std::max<std::int64_t>(period_ns, 1), 1, kMaxLag))) {}
+
+  /// A command's round trip, from its state's sending to its receipt [ns].
+  void record(std::int64_t round_trip_ns) noexcept {
+    const auto bin = static_cast<int>(std::clamp<std::int64_t>(round_trip_ns / period_ns_, 0, kMaxLag - 1));
+    if (recorded_ == kWindow) --counts_[static_cast<std::size_t>(window_[next_])];
+    else ++recorded_;
+    window_[next_] = static_cast<std::uint8_t>(bin);
+    ++counts_[static_cast<std::size_t>(bin)];
+    next_ = (next_ + 1) % kWindow;
+  }
+  int lag() const noexcept {
+    if (recorded_ == 0) return 1;
+    const int needed = (recorded_ * 95 + 99) / 100;  // ceil(0.95 n)
+    int cumulative = 0, bin = 0;
+    while (bin < kMaxLag - 1 && (cumulative += counts_[static_cast<std::size_t>(bin)]) < needed) ++bin;
+    return std::min(bin + 1, longest_);
+  }
+
+ private:
+  std::int64_t period_ns_;
+  int longest_;
+  int recorded_ = 0;
+  std::size_t next_ = 0;
+  std::array<std::uint8_t, kWindow> window_{};
+  std::array<int, kMaxLag> counts_{};
+};
+
 struct PlantNodeOptions {
   bool lockstep = false;
   double rate_hz = 1000;       ///< control rate
@@ -128,6 +172,7 @@ struct PlantNodeOptions {
 
 /// What the plant node counted.
 struct PlantCounts {
+  /// late: came after the period it was due to act from had started.
   long states_published = 0, commands_applied = 0, commands_missing = 0, commands_late = 0;
   long commands_failed = 0, states_resent = 0;
   long rejected = 0;  ///< commands refused, for one of these reasons:
@@ -144,12 +189,15 @@ class PlantNode {
       : lcm_(lcm), states_(states), o_(o), codec_(checked(dimension)),
         scheduler_(static_cast<std::int64_t>(std::llround(1e9 / o.rate_hz)), monotonic_ns(), o.periods),
         watchdog_(static_cast<std::int64_t>(o.watchdog_ms) * 1000000, monotonic_ns()),
-        round_trip_us_(o.periods), compute_ns_(o.periods), answered_sequences_(o.periods),
-        deadline_work_us_(o.periods) {
+        hold_lag_(scheduler_.period_ns()), round_trip_us_(o.periods), compute_ns_(o.periods),
+        answered_sequences_(o.periods), deadline_work_us_(o.periods), hold_lag_periods_(o.periods),
+        applied_states_(o.periods) {
     run_id_ = o.run_id != 0 ? o.run_id : random_run_id();
     hold_ = Vector::Zero(dimension);
     incoming_force_ = Vector::Zero(dimension);
     latest_force_ = Vector::Zero(dimension);
+    answers_ = Eigen::MatrixXd::Zero(dimension, kAnswerSlots);
+    answer_sequence_.fill(-1);
     subscription_ = lcm_.subscribe(command_channel, &PlantNode::on_command, this);
   }
   ~PlantNode() { lcm_.unsubscribe(subscription_); }
@@ -186,17 +234,29 @@ class PlantNode {
       const std::int64_t now = scheduler_.wait_for(period);
       for (int i = 0; i < kMaxPerPeriod && lcm_.handleTimeout(0) > 0; ++i) {
       }
-      if (answered_ > last_applied_) {
-        // Applied from this period on: the lag the controller's hold is told (hold_delay_ns).
-        hold_delay_ns_ = (period - answered_) * scheduler_.period_ns();
-        last_applied_ = answered_;
+      // The answer due now (to state period - lag), or when it has not come the newest older one
+      // not yet applied.
+      const int lag = hold_lag_.lag();
+      const std::int64_t due = period - lag;
+      std::int64_t chosen = -1;
+      for (std::int64_t k = std::min(due, answered_); k > last_applied_ && k > due - kAnswerSlots; --k)
+        if (answer_sequence_[slot(k)] == k) {
+          chosen = k;
+          break;
+        }
+      hold_delay_ns_ = lag * scheduler_.period_ns();
+      if (chosen >= 0) {
+        last_applied_ = chosen;
         watchdog_.feed(now);
         ++counts_.commands_applied;
-        hold_ = latest_failed_ ? Vector::Zero(n) : latest_force_;
+        if (answer_failed_[slot(chosen)]) hold_.setZero();
+        else hold_ = answers_.col(static_cast<Eigen::Index>(slot(chosen)));
       } else {
         ++counts_.commands_missing;
         if (watchdog_.check(now) && !o_.safe_hold) hold_.setZero();
       }
+      hold_lag_periods_.add(lag);
+      applied_states_.add(static_cast<double>(last_applied_));
       for (int i = 0; i < n; ++i) u[static_cast<std::size_t>(i)] = hold_(i);
       awaited_ = period;
       exact_ = false;
@@ -255,12 +315,14 @@ class PlantNode {
       last_applied_ = answered_;
       if (!latest_failed_) hold_ = latest_force_;
       // Applied at once, as in lock-step; the answers to the next states act a period later at
-      // the soonest, which their states report until an applied command measures the lag.
-      hold_delay_ns_ = scheduler_.period_ns();
+      // the soonest (their round trips set the lag from then on).
+      hold_delay_ns_ = hold_lag_.lag() * scheduler_.period_ns();
     } else {
       ++counts_.commands_missing;
       if (auth_) return refuse_to_run("in real time");
     }
+    hold_lag_periods_.add(0);
+    applied_states_.add(static_cast<double>(last_applied_));
     for (int i = 0; i < codec_.dimension(); ++i) u[static_cast<std::size_t>(i)] = hold_(i);
     return true;
   }
@@ -289,16 +351,20 @@ class PlantNode {
     if (k > last_published_ || k <= answered_ || (exact_ && k != awaited_) ||
         k <= last_published_ - static_cast<std::int64_t>(published_at_.size()))
       return reject(&counts_.stale);
-    // In real time the command for state k belongs to period k; one arriving after a newer state
-    // went out is late (it is still the newest and is applied).
-    if (k < last_published_) ++counts_.commands_late;
+    // In real time the answer to state k acts from period k + lag: one coming after that period
+    // started is late (when it is the newest it is still applied).
+    if (!o_.lockstep && k + hold_lag_.lag() <= last_published_) ++counts_.commands_late;
     const std::int64_t sent = published_at_[static_cast<std::size_t>(k) % published_at_.size()];
     round_trip_us_.add(static_cast<double>(received_ns - sent) * 1e-3);
+    if (!o_.lockstep) hold_lag_.record(received_ns - sent);
     compute_ns_.add(static_cast<double>(incoming_.compute_ns));
     answered_sequences_.add(static_cast<double>(k));
     latest_failed_ = incoming_.status != 0;  // any status but kOk: no answer, zero force
     if (latest_failed_) ++counts_.commands_failed;
     latest_force_ = incoming_force_;
+    answers_.col(static_cast<Eigen::Index>(slot(k))) = incoming_force_;
+    answer_sequence_[slot(k)] = k;
+    answer_failed_[slot(k)] = latest_failed_;
     answered_ = k;
     ready_ = true;
   }
@@ -313,6 +379,11 @@ class PlantNode {
   /// Real time: per period, from the wake at its deadline to its state's publication (the bounded
   /// drain of the socket, the command's application, the state's encoding and sending) [us].
   const LatencyRecorder& deadline_work_us() const noexcept { return deadline_work_us_; }
+  /// Real time: per period from the first, the hold lag in periods with which it applied answers
+  /// (HoldLag; 0 for the first period, whose answer was awaited) and the state whose answer it
+  /// held (-1: none yet). An answer is missing in period p when p - applied state > the lag.
+  const LatencyRecorder& hold_lag_periods() const noexcept { return hold_lag_periods_; }
+  const LatencyRecorder& applied_states() const noexcept { return applied_states_; }
   const PlantNodeOptions& options() const noexcept { return o_; }
 
   /// The run's loop statistics as the plant publishes them when it stops.
@@ -357,6 +428,9 @@ class PlantNode {
   }
 
   static constexpr std::int64_t kResendNs = 100'000'000;
+  /// Answers kept for the period they are due in (more than the longest hold lag).
+  static constexpr std::int64_t kAnswerSlots = 2 * HoldLag::kMaxLag;
+  static std::size_t slot(std::int64_t k) noexcept { return static_cast<std::size_t>(k % kAnswerSlots); }
 
   static int checked(int dimension) {
     if (dimension < 1 || dimension > kMaxDimension)
@@ -433,8 +507,13 @@ class PlantNode {
   std::array<std::int64_t, 4096> published_at_{};  ///< wall clock [ns] each state was sent
   std::int64_t awaited_ = -1, answered_ = -1, last_published_ = -1, last_applied_ = -1;
   std::int64_t hold_delay_ns_ = 0;
+  HoldLag hold_lag_;
+  Eigen::MatrixXd answers_;  ///< the forces received, column slot(k) for state k
+  std::array<std::int64_t, kAnswerSlots> answer_sequence_{};
+  std::array<bool, kAnswerSlots> answer_failed_{};
   PlantCounts counts_;
-  LatencyRecorder round_trip_us_, compute_ns_, answered_sequences_, deadline_work_us_;
+  LatencyRecorder round_trip_us_, compute_ns_, answered_sequences_, deadline_work_us_, hold_lag_periods_,
+      applied_states_;
 };
 
 }  // namespace gausstrack::nodes
