@@ -107,6 +107,8 @@ void print_summary(const PlantNode& node, const plant_sim::RunResult& result, co
               c.commands_missing, c.commands_late, c.commands_failed, node.scheduler().misses(),
               node.watchdog().trips(), c.rejected, stats.round_trip_us_p50, stats.round_trip_us_p99,
               stats.round_trip_us_max, out_dir.c_str());
+  if (const std::string counts = plant_sim::warning_counts(c.warnings); !counts.empty())
+    std::printf("  warnings, in control periods: %s\n", counts.c_str());
 }
 
 // The scene over LCM: publishes states, applies commands, then writes the run's files and
@@ -136,7 +138,10 @@ int run_plant(const PlantProcessOptions& o, const plant_sim::Scene& scene, plant
                                     std::span<const double> qd, std::span<double> u) {
     return node.exchange(period, t, q, qd, u);
   };
-  const RunResult result = run_scene(scene, run_options);
+  RunResult result = run_scene(scene, run_options);
+  // The run's warnings are those of the answers the plant held, period by period.
+  result.summary.warnings = node.counts().warnings;
+  result.summary.rows_not_met = rows_not_met(scene, result.summary.warnings, "control periods");
 
   const loop_stats_t stats = node.stats();
   stats_out.publish_message(stats);
@@ -153,6 +158,11 @@ int run_plant(const PlantProcessOptions& o, const plant_sim::Scene& scene, plant
   if (!result.summary.failure.empty()) {
     std::fprintf(stderr, "error: %s (data up to then written to %s)\n", result.summary.failure.c_str(),
                  o.out_dir.c_str());
+    return 1;
+  }
+  if (!result.summary.rows_not_met.empty() && !g_stop_requested) {
+    std::fprintf(stderr, "error: the run completed but did not track: %s (data written to %s)\n",
+                 result.summary.rows_not_met.c_str(), o.out_dir.c_str());
     return 1;
   }
   // Interrupted by a signal: the data up to then is written and the run counts as done.

@@ -217,7 +217,10 @@ void Control::force(const V& q, const V& qd, double t, RunSummary& stats, V& u) 
   ++stats.control_evaluations;
   if (failed(law_->compute(q.data(), qd.data(), t, u.data()))) {
     ++stats.control_failures;
+    stats.warnings.add_failure();
     u.setZero();
+  } else {
+    stats.warnings.add(law_->warnings());
   }
 }
 

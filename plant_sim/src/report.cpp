@@ -83,6 +83,11 @@ nlohmann::ordered_json summary_json(const Scene& scene, const RunResult& result)
   j["rhs_evaluations"] = s.rhs_evaluations;
   j["control_evaluations"] = s.control_evaluations;
   j["control_failures"] = s.control_failures;
+  // Each warning kind: the evaluations (periods) that carried it; whether the rows held.
+  nlohmann::ordered_json& warnings = j["warnings"] = nlohmann::ordered_json::object();
+  for (int b = 0; b < warning::kCount; ++b) warnings[warning::name(b)] = s.warnings.by_kind[static_cast<std::size_t>(b)];
+  j["rows_not_met_share"] = s.warnings.rows_not_met_share();
+  j["rows_not_met"] = s.rows_not_met.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(s.rows_not_met);
   j["projections"] = s.projections;
   nlohmann::ordered_json& effects = j["effect_evaluations"] = nlohmann::ordered_json::object();
   for (std::size_t k = 0; k < s.effect_evaluations.size(); ++k)
@@ -92,6 +97,26 @@ nlohmann::ordered_json summary_json(const Scene& scene, const RunResult& result)
   if (!s.engine.empty()) j["engine_effects"] = s.engine_effects;
   j["wall_time_s"] = s.wall_time_s;
   return j;
+}
+
+std::string rows_not_met(const Scene& scene, const WarningTally& w, const char* unit) {
+  const double share = w.rows_not_met_share();
+  if (!scene.tracking.enabled || share <= scene.tracking.unmet_limit) return "";
+  char head[256];
+  std::snprintf(head, sizeof head, "the task rows were not met in %.1f %% of the %s (%llu of %llu; tracking.unmet_limit %g %%)",
+                100 * share, unit, static_cast<unsigned long long>(w.rows_not_met),
+                static_cast<unsigned long long>(w.calls), 100 * scene.tracking.unmet_limit);
+  const std::string kinds = warning_counts(w);
+  return std::string(head) + (kinds.empty() ? "" : ": " + kinds);
+}
+
+std::string warning_counts(const WarningTally& w) {
+  std::string kinds;
+  for (int b = 0; b < warning::kCount; ++b)
+    if (const auto n = w.by_kind[static_cast<std::size_t>(b)]; n > 0)
+      kinds += (kinds.empty() ? "" : ", ") + std::string(warning::name(b)) + " " + std::to_string(n);
+  if (w.failed > 0) kinds += (kinds.empty() ? "" : ", ") + std::string("failed ") + std::to_string(w.failed);
+  return kinds;
 }
 
 void write_json(const nlohmann::ordered_json& document, const std::string& path) {

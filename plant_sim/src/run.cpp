@@ -116,6 +116,7 @@ RunResult Run::execute() {
   if (!result_.samples.empty())
     stats_.rms_tracking_error = std::sqrt(sum_squares / static_cast<double>(result_.samples.size()));
   stats_.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  stats_.rows_not_met = rows_not_met(s_, stats_.warnings, "control evaluations");
   return std::move(result_);
 }
 

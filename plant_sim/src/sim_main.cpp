@@ -53,7 +53,14 @@ int main(int argc, char** argv) {
     if (s.control_failures > 0)
       std::printf("  warning: %llu control evaluations failed (zero force applied)\n",
                   static_cast<unsigned long long>(s.control_failures));
+    if (const std::string counts = warning_counts(s.warnings); !counts.empty())
+      std::printf("  warnings, in control evaluations: %s\n", counts.c_str());
     const double reached = result.samples.empty() ? 0.0 : result.samples.back().t;
+    if (!s.rows_not_met.empty() && s.failure.empty() && !gausstrack::g_stop_requested) {
+      std::fprintf(stderr, "error: %s: the run completed but did not track: %s (data written)\n", scene_path.c_str(),
+                   s.rows_not_met.c_str());
+      return 1;
+    }
     if (!s.failure.empty()) {
       std::fprintf(stderr, "error: %s: %s (samples up to t = %g s written)\n", scene_path.c_str(), s.failure.c_str(),
                    reached);

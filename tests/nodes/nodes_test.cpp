@@ -518,6 +518,33 @@ TEST(PlantHoldLag, AnswersActAFixedLagAfterTheirStates) {
   EXPECT_EQ(held[39], 36.0);
 }
 
+// The run's warnings over LCM are the held answers': each period counts the warnings of the
+// answer it held, a failed answer counts as failed, and both leave rows unmet.
+TEST_F(PlantFixture, EachPeriodTalliesTheWarningsOfTheAnswerItHeld) {
+  for (bool lockstep : {true, false}) {
+    PlantNode node(lcm, states, "CMD", 2, options(lockstep));
+    fake.reply = [](const plant_state_t& s, control_command_t& c) {
+      c.force[0] = 1.0;
+      c.warnings = static_cast<std::int32_t>(s.sequence == 1 ? warning::kConstraintsNotMet | warning::kRankDeficient
+                                                             : warning::kSaturated);
+      if (s.sequence == 3) c.status = 3, c.warnings = 0;
+    };
+    const std::array<double, 2> q{0, 0}, qd{0, 0};
+    std::array<double, 2> u{};
+    for (int k = 0; k < 5; ++k) ASSERT_TRUE(node.exchange(k, 0.005 * k, q, qd, u));
+    // Lock-step holds the answers to states 0..4 in periods 0..4; real time the answer to state 0
+    // in periods 0 (awaited) and 1 (still held), and to state k - 1 in period k from then on.
+    const WarningTally& w = node.counts().warnings;
+    const char* mode = lockstep ? "lock-step" : "real time";
+    EXPECT_EQ(w.calls, 5u) << mode;
+    EXPECT_EQ(w.by_kind[1], 1u) << mode;  // constraints not met: state 1
+    EXPECT_EQ(w.by_kind[0], 1u) << mode;  // rank deficient: state 1
+    EXPECT_EQ(w.by_kind[5], 3u) << mode;  // saturated: states 0, 2, 4 (lock-step); 0 twice, 2 (real time)
+    EXPECT_EQ(w.failed, 1u) << mode;      // state 3
+    EXPECT_EQ(w.rows_not_met, 2u) << mode;
+  }
+}
+
 TEST_F(PlantFixture, CommandsOfAnotherRunAreRefused) {
   PlantNode node(lcm, states, "CMD", 2, options(true));
   fake.reply = [](const plant_state_t&, control_command_t& c) {

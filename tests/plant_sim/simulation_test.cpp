@@ -26,6 +26,32 @@ namespace odeint = boost::numeric::odeint;
 
 std::size_t kind(EffectKind k) { return static_cast<std::size_t>(k); }
 
+// Every control evaluation's warnings are tallied. A run whose answers gave task rows up in more
+// than tracking.unmet_limit of its evaluations completes and says that it did not track, with the
+// kinds; a tracking error far above the law's confirms it independently.
+TEST(Simulation, WarningsAreCountedAndARunThatDidNotTrackSaysSo) {
+  const std::string path = kScenes + "/duffing_alpha4.yaml";
+  const RunResult ok = run_scene(load_scene(path, {"duration=0.5"}));
+  EXPECT_EQ(ok.summary.warnings.calls, ok.summary.control_evaluations);
+  EXPECT_EQ(ok.summary.warnings.rows_not_met, 0u);
+  EXPECT_TRUE(ok.summary.rows_not_met.empty());
+  // A singular-value floor far above that of D A^(-1/2) (about 1.4): each answer gives the row up.
+  const RunResult given_up = run_scene(load_scene(path, {"duration=0.5", "tracking.min_singular_value=1e6"}));
+  const RunSummary& s = given_up.summary;
+  EXPECT_TRUE(s.failure.empty());
+  EXPECT_EQ(s.warnings.calls, s.control_evaluations);
+  EXPECT_EQ(s.warnings.by_kind[4], s.control_evaluations);  // warning::kNearSingular is bit 4
+  EXPECT_EQ(s.warnings.rows_not_met, s.control_evaluations);
+  EXPECT_NE(s.rows_not_met.find("100.0 % of the control evaluations"), std::string::npos) << s.rows_not_met;
+  EXPECT_NE(s.rows_not_met.find("near_singular"), std::string::npos) << s.rows_not_met;
+  EXPECT_GT(s.max_tracking_error, 1e3 * ok.summary.max_tracking_error);
+  // A limit that allows every evaluation to miss accepts the same run.
+  const RunResult allowed = run_scene(
+      load_scene(path, {"duration=0.5", "tracking.min_singular_value=1e6", "tracking.unmet_limit=1"}));
+  EXPECT_TRUE(allowed.summary.rows_not_met.empty());
+  EXPECT_THROW(load_scene(path, {"tracking.unmet_limit=2"}), SceneError);
+}
+
 TEST(Simulation, DuffingTracksToThePaperAccuracyForBothAlphas) {
   for (const char* name : {"duffing_alpha4", "duffing_alpha0.4"}) {
     const Scene s = load_scene(kScenes + "/" + name + ".yaml");

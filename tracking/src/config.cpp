@@ -41,7 +41,7 @@ void check_parameter_names(const Reader& parent, const char* key, const std::str
 
 TrackingSpec read_tracking(const Reader& t) {
   t.allow_only({"model", "parameters", "trajectory", "stabilization", "strategy", "force_limit",
-                "min_singular_value", "hold", "delay"});
+                "min_singular_value", "hold", "delay", "unmet_limit"});
   TrackingSpec tr;
   tr.enabled = true;
   tr.model = t.text("model");
@@ -72,6 +72,8 @@ TrackingSpec read_tracking(const Reader& t) {
   tr.hold = t.choice("hold", kHoldLaws, "hold law", HoldLaw::kMidpoint);
   tr.delay = t.non_negative("delay", 0.0);
   tr.delay_configured = t.has("delay");
+  tr.unmet_limit = t.non_negative("unmet_limit", tr.unmet_limit);
+  if (tr.unmet_limit > 1) t.child("unmet_limit").fail("must be a share between 0 and 1");
   return tr;
 }
 

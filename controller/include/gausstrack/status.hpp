@@ -1,6 +1,7 @@
 // Outcome of a real-time call: whether it failed, and how good the answer is.
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 namespace gausstrack {
@@ -51,7 +52,46 @@ inline constexpr std::uint32_t kSaturated = 1u << 5;
 /// with a sampled-data hold, the law could not be evaluated at the predicted state (a non-finite
 /// prediction, a failed solve there): the force is the law's at the measured state, held.
 inline constexpr std::uint32_t kHoldAtMeasuredState = 1u << 6;
+
+/// The number of warning kinds: bits 0 to kCount - 1.
+inline constexpr int kCount = 7;
+/// The kinds that say task rows were not met by the answer: inconsistent or given-up rows.
+inline constexpr std::uint32_t kRowsNotMet = kConstraintsNotMet | kNearSingular;
+
+/// The name of warning bit `bit` (0 .. kCount - 1), as summaries print it.
+constexpr const char* name(int bit) noexcept {
+  constexpr const char* kNames[kCount] = {"rank_deficient",   "constraints_not_met", "ill_conditioned",
+                                          "fell_back_to_svd", "near_singular",       "saturated",
+                                          "hold_at_measured_state"};
+  return bit >= 0 && bit < kCount ? kNames[bit] : "unknown";
+}
 }  // namespace warning
+
+/// A run's warnings, tallied call by call (or control period by control period): how many carried
+/// each kind, how many failed (no answer: zero force), and how many left task rows unmet
+/// (warning::kRowsNotMet, or failed). Allocation-free.
+struct WarningTally {
+  std::array<std::uint64_t, warning::kCount> by_kind{};
+  std::uint64_t failed = 0;
+  std::uint64_t rows_not_met = 0;
+  std::uint64_t calls = 0;
+
+  constexpr void add_failure() noexcept {
+    ++calls;
+    ++failed;
+    ++rows_not_met;
+  }
+  constexpr void add(std::uint32_t warnings) noexcept {
+    ++calls;
+    for (int b = 0; b < warning::kCount; ++b)
+      if (warnings & (1u << b)) ++by_kind[static_cast<std::size_t>(b)];
+    if (warnings & warning::kRowsNotMet) ++rows_not_met;
+  }
+  /// The share of the calls whose answer left task rows unmet (0 without calls).
+  constexpr double rows_not_met_share() const noexcept {
+    return calls == 0 ? 0.0 : static_cast<double>(rows_not_met) / static_cast<double>(calls);
+  }
+};
 
 /// Which inputs held a NaN or Inf, as bit flags in `SolveDiagnostics::non_finite_inputs`.
 namespace input {

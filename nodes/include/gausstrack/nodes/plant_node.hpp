@@ -178,6 +178,8 @@ struct PlantCounts {
   long rejected = 0;  ///< commands refused, for one of these reasons:
   long malformed = 0, wrong_dimension = 0, non_finite = 0, stale = 0, other_run = 0;
   AuthCounts auth;  ///< refused by authentication, by reason (also in rejected)
+  /// The held answers' warnings, each period an answer was held (a failed one counts as failed).
+  WarningTally warnings;
 };
 
 class PlantNode {
@@ -249,12 +251,19 @@ class PlantNode {
         last_applied_ = chosen;
         watchdog_.feed(now);
         ++counts_.commands_applied;
-        if (answer_failed_[slot(chosen)]) hold_.setZero();
+        held_failed_ = answer_failed_[slot(chosen)];
+        held_warnings_ = answer_warnings_[slot(chosen)];
+        held_answer_ = true;
+        if (held_failed_) hold_.setZero();
         else hold_ = answers_.col(static_cast<Eigen::Index>(slot(chosen)));
       } else {
         ++counts_.commands_missing;
-        if (watchdog_.check(now) && !o_.safe_hold) hold_.setZero();
+        if (watchdog_.check(now) && !o_.safe_hold) {
+          hold_.setZero();
+          held_answer_ = false;
+        }
       }
+      tally_held_answer();
       hold_lag_periods_.add(lag);
       applied_states_.add(static_cast<double>(last_applied_));
       for (int i = 0; i < n; ++i) u[static_cast<std::size_t>(i)] = hold_(i);
@@ -276,6 +285,10 @@ class PlantNode {
       return false;
     }
     ++counts_.commands_applied;
+    held_failed_ = latest_failed_;
+    held_warnings_ = latest_warnings_;
+    held_answer_ = true;
+    tally_held_answer();
     for (int i = 0; i < n; ++i) u[static_cast<std::size_t>(i)] = latest_failed_ ? 0.0 : latest_force_(i);
     return true;
   }
@@ -314,6 +327,10 @@ class PlantNode {
       ++counts_.commands_applied;
       last_applied_ = answered_;
       if (!latest_failed_) hold_ = latest_force_;
+      held_failed_ = latest_failed_;
+      held_warnings_ = latest_warnings_;
+      held_answer_ = true;
+      tally_held_answer();
       // Applied at once, as in lock-step; the answers to the next states act a period later at
       // the soonest (their round trips set the lag from then on).
       hold_delay_ns_ = hold_lag_.lag() * scheduler_.period_ns();
@@ -360,11 +377,13 @@ class PlantNode {
     compute_ns_.add(static_cast<double>(incoming_.compute_ns));
     answered_sequences_.add(static_cast<double>(k));
     latest_failed_ = incoming_.status != 0;  // any status but kOk: no answer, zero force
+    latest_warnings_ = static_cast<std::uint32_t>(incoming_.warnings);
     if (latest_failed_) ++counts_.commands_failed;
     latest_force_ = incoming_force_;
     answers_.col(static_cast<Eigen::Index>(slot(k))) = incoming_force_;
     answer_sequence_[slot(k)] = k;
     answer_failed_[slot(k)] = latest_failed_;
+    answer_warnings_[slot(k)] = latest_warnings_;
     answered_ = k;
     ready_ = true;
   }
@@ -448,6 +467,13 @@ class PlantNode {
     return false;
   }
 
+  // The period's held answer into the warning tally (nothing while the watchdog's safe action holds).
+  void tally_held_answer() noexcept {
+    if (!held_answer_) return;
+    if (held_failed_) counts_.warnings.add_failure();
+    else counts_.warnings.add(held_warnings_);
+  }
+
   void reject(long* reason) noexcept {
     ++counts_.rejected;
     ++*reason;
@@ -511,6 +537,9 @@ class PlantNode {
   Eigen::MatrixXd answers_;  ///< the forces received, column slot(k) for state k
   std::array<std::int64_t, kAnswerSlots> answer_sequence_{};
   std::array<bool, kAnswerSlots> answer_failed_{};
+  std::array<std::uint32_t, kAnswerSlots> answer_warnings_{};
+  std::uint32_t latest_warnings_ = 0, held_warnings_ = 0;
+  bool held_failed_ = false, held_answer_ = false;
   PlantCounts counts_;
   LatencyRecorder round_trip_us_, compute_ns_, answered_sequences_, deadline_work_us_, hold_lag_periods_,
       applied_states_;

@@ -36,6 +36,8 @@ class ControlLaw {
   virtual int dof() const noexcept = 0;
   /// Writes the force (dof() entries, zero on failure) and returns the solve's status.
   virtual Status compute(const double* q, const double* qd, double t, double* force) noexcept = 0;
+  /// The last compute's warnings (warning:: flags).
+  virtual std::uint32_t warnings() const noexcept = 0;
   virtual double tracking_error(const double* q, const double* qd, double t) const = 0;
 };
 
@@ -51,6 +53,7 @@ class ModelControlLaw final : public ControlLaw {
     u = out_.force;
     return s;
   }
+  std::uint32_t warnings() const noexcept override { return out_.diagnostics.warnings; }
   double tracking_error(const double* q, const double* qd, double t) const override {
     return tracking::tracking_error(controller_.model(), V(Eigen::Map<const V>(q)), V(Eigen::Map<const V>(qd)), t);
   }

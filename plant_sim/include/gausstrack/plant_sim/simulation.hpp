@@ -34,6 +34,12 @@ struct RunSummary {
   std::uint64_t rhs_evaluations = 0;  ///< evaluations of the equations of motion
   std::uint64_t control_evaluations = 0;
   std::uint64_t control_failures = 0;  ///< controller calls that returned a failure status
+  /// The warnings of the control evaluations (offline) or of the control periods (over LCM: the
+  /// applied answer's, each period it was held).
+  WarningTally warnings;
+  /// Not empty when the run did not track: the share of evaluations (periods) whose answer left
+  /// task rows unmet was above tracking.unmet_limit (rows_not_met()). The run still completed.
+  std::string rows_not_met;
   std::uint64_t projections = 0;       ///< states projected onto the constraints (plant.projection)
   double wall_time_s = 0;
   bool stopped_early = false;  ///< the external control source, or a stop request, ended the run
@@ -98,6 +104,14 @@ struct RunOptions {
 };
 
 RunResult run_scene(const Scene& scene, const RunOptions& options = {});
+
+/// Why a run did not track, or empty: the share of `warnings.calls` (control evaluations, or
+/// periods: `unit`) whose answer left task rows unmet is above the scene's tracking.unmet_limit;
+/// the message gives the share and the count of each warning kind.
+std::string rows_not_met(const Scene& scene, const WarningTally& warnings, const char* unit);
+/// "constraints_not_met 12, saturated 3": the count of each warning kind that occurred, and of
+/// failures; empty when none.
+std::string warning_counts(const WarningTally& warnings);
 
 /// A progress display for on_progress: "name: t = 3.000 / 10.000 s ( 30%)" on stderr, rewritten
 /// in place, shown only when stderr is a terminal and the run has lasted a second.

@@ -59,6 +59,9 @@ struct TrackingSpec {
   /// tracking.delay was given: a controller process keeps it instead of the delay the plant
   /// reports with each state.
   bool delay_configured = false;
+  /// The largest share of control evaluations (periods) whose answer may leave task rows unmet
+  /// (warning::kRowsNotMet) before a run reports that it did not track (tracking.unmet_limit).
+  double unmet_limit = 0.01;
 
   /// The value of a parameter the configuration sets, or `fallback`.
   double parameter(const std::string& name, double fallback) const {
