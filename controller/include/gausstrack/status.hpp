@@ -13,6 +13,9 @@ enum class Status : std::uint8_t {
   kNonFiniteInput,                  ///< NaN or Inf in an input; see `non_finite_inputs`
   kMassMatrixNotPositiveDefinite,   ///< Cholesky of A failed: A is not symmetric positive definite
   kNonFiniteResult,                 ///< finite input overflowed (entries near the range limit)
+  /// The actuation's weight W is not positive definite: with Gauss's weight B^T A^-1 B, the
+  /// columns of the actuation matrix B are dependent (ActuatedController).
+  kWeightNotPositiveDefinite,
 };
 
 /// True when the call produced no answer (outputs are zero).
@@ -24,6 +27,7 @@ constexpr const char* to_string(Status s) noexcept {
     case Status::kNonFiniteInput: return "non-finite input";
     case Status::kMassMatrixNotPositiveDefinite: return "mass matrix not positive definite";
     case Status::kNonFiniteResult: return "non-finite result";
+    case Status::kWeightNotPositiveDefinite: return "actuation weight not positive definite";
   }
   return "unknown";
 }
@@ -101,6 +105,7 @@ inline constexpr std::uint32_t kAppliedForce = 1u << 2;     // Q
 inline constexpr std::uint32_t kConstraintMatrix = 1u << 3; // D
 inline constexpr std::uint32_t kConstraintRhs = 1u << 4;    // g
 inline constexpr std::uint32_t kState = 1u << 5;            // q, q' or t given to a controller
+inline constexpr std::uint32_t kActuation = 1u << 6;        // B, or an actuation weight W
 }  // namespace input
 
 }  // namespace gausstrack

@@ -1,0 +1,329 @@
+// The tracking law for a machine that pushes only through its actuators.
+//
+// A model that declares an actuation matrix B(q, t) (N x K: the generalized force of actuator
+// commands u in R^K is B u),
+//   static constexpr int kActuators = K;
+//   void actuation(const Eigen::Matrix<Scalar, N, 1>& q, Scalar t,
+//                  Eigen::Matrix<Scalar, N, K>& B) const noexcept;
+// is controlled by the u that meets the task rows D q'' = g with the least cost u^T W u:
+//   u = W^(-1/2) (D A^-1 B W^(-1/2))^+ (g - D a),   a = A^-1 (Q - f)
+// (Udwadia, Proc. R. Soc. A 464 (2008) 2341: every positive definite W gives a member of the
+// family; any square root of W gives the same u). The default weight is Gauss's,
+// W = B^T A^-1 B: the answer then is the one of least acceleration change in A's metric among the
+// forces B can give, and with B = I it is eq. (32)'s force (actuation_test holds the two equal).
+// When D A^-1 B has rank below P, some rows cannot be actuated: u meets the rows in the
+// least-squares sense, warning::kRankDeficient is set, and `unmet_rows` says which rows are not
+// met. The force B u is in the range of B by construction. As in TrackingController, u is split
+// into a closed-loop part (from -D a), a feedforward part (from the model's g) and a stabilizing
+// part (from Baumgarte's correction), each mapped through the same pseudo-inverse.
+//
+// How it is computed, with A = L L^T (Cholesky) and C = D L^-T (so that D A^-1 B = C L^-1 B):
+// - Gauss's weight: the thin SVD L^-1 B = U S V^T gives W = V S^2 V^T, and with the symmetric
+//   root the scaled task matrix is C U V^T, so u = V S^-1 (C U)^+ r. Dependent columns of B
+//   (a singular value of L^-1 B at or below K eps times the largest) make W singular:
+//   Status::kWeightNotPositiveDefinite.
+// - A given weight W = Lw Lw^T (set_weight): u = Lw^-T (C L^-1 B Lw^-T)^+ r.
+// The pseudo-inverse is the one-sided Jacobi SVD of rank_revealing.hpp with the solver options'
+// rank tolerance and singular-value floor (SolverOptions::min_singular_value: with Gauss's weight
+// the singular values are those of D A^(-1/2) restricted to the actuated directions, in the same
+// units). Fixed-size storage: allocation-free and exception-free after construction.
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "gausstrack/model.hpp"
+#include "gausstrack/rank_revealing.hpp"
+#include "gausstrack/small_dense.hpp"
+#include "gausstrack/status.hpp"
+#include "gausstrack/tracking_controller.hpp"
+
+namespace gausstrack {
+
+template <typename M>
+concept ActuatedModel =
+    Model<M> && requires(const M& m, const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& q, typename M::Scalar t,
+                         Eigen::Matrix<typename M::Scalar, M::kDof, M::kActuators>& b) {
+      requires M::kActuators >= 1;
+      { m.actuation(q, t, b) } noexcept;
+    };
+
+/// The actuator commands for one measured state, and the generalized force they give.
+template <int N, int P, int K, typename Scalar>
+struct ActuatedOutput {
+  using VectorN = Eigen::Matrix<Scalar, N, 1>;
+  using VectorP = Eigen::Matrix<Scalar, P, 1>;
+  using VectorK = Eigen::Matrix<Scalar, K, 1>;
+  VectorK control = VectorK::Zero();              ///< u, the actuator commands
+  VectorK control_closed_loop = VectorK::Zero();  ///< u's part from -D a (depends on q, q', t)
+  VectorK control_feedforward = VectorK::Zero();  ///< u's part from the model's g
+  VectorK control_stabilizing = VectorK::Zero();  ///< u's part from Baumgarte's correction
+  VectorN force = VectorN::Zero();                ///< B u, the generalized force
+  VectorN closed_loop = VectorN::Zero();          ///< B times u's closed-loop part
+  VectorN feedforward = VectorN::Zero();          ///< B times u's feedforward part
+  VectorN stabilizing = VectorN::Zero();          ///< B times u's stabilizing part
+  VectorN acceleration = VectorN::Zero();         ///< q'' = a + A^-1 B u on the model
+  VectorP row_residual = VectorP::Zero();         ///< D q'' - g, row by row (g stabilized)
+  /// Bit i (rows 0..63): row i is not met (it cannot be actuated, or its direction was given up).
+  std::uint64_t unmet_rows = 0;
+  /// 1, or the factor u and its parts were scaled by to meet the actuator limits.
+  Scalar saturation_scale = Scalar(1);
+  VectorP constraint_error = VectorP::Zero();       ///< e at the measured state
+  VectorP constraint_error_rate = VectorP::Zero();  ///< e' at the measured state
+  /// Status, warnings, and rank and singular values of D A^-1 B W^(-1/2).
+  SolveDiagnostics<Scalar> diagnostics;
+};
+
+/// The actuated law for an ActuatedModel: one evaluation of the model's terms and of B, Baumgarte's
+/// correction per row, one SVD of B's scaled directions (Gauss's weight) and one of the scaled
+/// task matrix. The solver options' strategy is not used (the task matrix is always factored by
+/// the SVD); its tolerances are.
+template <ActuatedModel M>
+class ActuatedController {
+ public:
+  using Scalar = typename M::Scalar;
+  static constexpr int N = M::kDof;
+  static constexpr int P = M::kConstraints;
+  static constexpr int K = M::kActuators;
+  using VectorN = Eigen::Matrix<Scalar, N, 1>;
+  using VectorP = Eigen::Matrix<Scalar, P, 1>;
+  using VectorK = Eigen::Matrix<Scalar, K, 1>;
+  using MatrixNK = Eigen::Matrix<Scalar, N, K>;
+  using MatrixKK = Eigen::Matrix<Scalar, K, K>;
+  using Output = ActuatedOutput<N, P, K, Scalar>;
+  using Options = ControllerOptions<Scalar>;
+
+  /// Throws std::invalid_argument (when exceptions are enabled; traps otherwise) if
+  /// `options.validate()` reports a problem.
+  explicit ActuatedController(M model = M{}, const Options& options = Options{})
+      : model_(std::move(model)), options_(options) {
+    if (const char* problem = options.validate()) config_error(problem);
+    row_gains_.fill(options.stabilization);
+  }
+
+  M& model() noexcept { return model_; }
+  const M& model() const noexcept { return model_; }
+  const Options& options() const noexcept { return options_; }
+  /// B at the last computed state.
+  const MatrixNK& actuation() const noexcept { return b_; }
+
+  /// Baumgarte gains of one task row, as TrackingController::set_stabilization.
+  bool set_stabilization(int row, const Stabilization<Scalar>& gains) noexcept {
+    if (row < 0 || row >= P || !std::isfinite(gains.zeta) || !(gains.zeta >= Scalar(0)) ||
+        !std::isfinite(gains.omega) || !(gains.omega >= Scalar(0)))
+      return false;
+    row_gains_[static_cast<std::size_t>(row)] = gains;
+    return true;
+  }
+
+  /// The weight W of the cost u^T W u (symmetric positive definite; only its lower triangle is
+  /// read). Returns false, changing nothing, otherwise.
+  bool set_weight(const MatrixKK& w) noexcept {
+    MatrixKK factor = w;
+    if (!w.allFinite() || !small_dense::cholesky_in_place(factor) || !factor.allFinite()) return false;
+    weight_factor_ = factor.template triangularView<Eigen::Lower>();
+    gauss_weight_ = false;
+    return true;
+  }
+  /// Back to Gauss's weight, B^T A^-1 B (the default).
+  void use_gauss_weight() noexcept { gauss_weight_ = true; }
+  bool gauss_weight() const noexcept { return gauss_weight_; }
+
+  /// Actuator limits |u_i| <= limit_i: u beyond them is scaled down as a whole (warning::kSaturated,
+  /// saturation_scale). Returns false, changing nothing, unless every limit is > 0.
+  bool set_actuator_limit(const VectorK& limit) noexcept {
+    for (int i = 0; i < K; ++i)
+      if (!(limit(i) > Scalar(0))) return false;
+    limit_ = limit;
+    return true;
+  }
+
+  /// Actuator commands for state (q, q', t). On failure every output is zero.
+  template <typename Dq, typename Dqd>
+  Status compute(const Eigen::MatrixBase<Dq>& q, const Eigen::MatrixBase<Dqd>& qd, Scalar t,
+                 Output& out) noexcept {
+    out = Output{};
+    if (!q.allFinite() || !qd.allFinite() || !std::isfinite(t)) return fail(out, Status::kNonFiniteInput, input::kState);
+    const VectorN qv = q;
+    const VectorN qdv = qd;
+    evaluate_model(model_, qv, qdv, t, terms_);
+    model_.actuation(qv, t, b_);
+    out.constraint_error = terms_.constraint_error;
+    out.constraint_error_rate = terms_.constraint_error_rate;
+    std::uint32_t bad = 0;
+    if (!terms_.mass_matrix.allFinite()) bad |= input::kMassMatrix;
+    if (!terms_.nonlinear_force.allFinite()) bad |= input::kNonlinearForce;
+    if (!terms_.applied_force.allFinite()) bad |= input::kAppliedForce;
+    if (!terms_.constraint_matrix.allFinite()) bad |= input::kConstraintMatrix;
+    if (!terms_.constraint_rhs.allFinite() || !terms_.constraint_error.allFinite() ||
+        !terms_.constraint_error_rate.allFinite())
+      bad |= input::kConstraintRhs;
+    if (!b_.allFinite()) bad |= input::kActuation;
+    if (bad != 0) return fail(out, Status::kNonFiniteInput, bad);
+
+    VectorP correction = VectorP::Zero();
+    for (int i = 0; i < P; ++i) {
+      const Stabilization<Scalar>& s = row_gains_[static_cast<std::size_t>(i)];
+      if (s.enabled())
+        correction(i) = -(Scalar(2) * s.zeta * s.omega) * terms_.constraint_error_rate(i) -
+                        (s.omega * s.omega) * terms_.constraint_error(i);
+    }
+
+    // A = L L^T; a = A^-1 (Q - f); L^-1 B; C^T = L^-1 D^T.
+    l_ = terms_.mass_matrix;
+    if (!small_dense::cholesky_in_place(l_)) return fail(out, Status::kMassMatrixNotPositiveDefinite, 0);
+    VectorN a = terms_.applied_force - terms_.nonlinear_force;
+    small_dense::solve_lower_in_place(l_, a);
+    small_dense::solve_lower_transposed_in_place(l_, a);
+    MatrixNK lb = b_;
+    small_dense::solve_lower_in_place(l_, lb);
+    Eigen::Matrix<Scalar, N, P> ct = terms_.constraint_matrix.transpose();
+    small_dense::solve_lower_in_place(l_, ct);
+
+    // The actuated directions G (N x K) with D A^-1 B W^(-1/2) = C G, and back = the map from the
+    // pseudo-inverse's answer to u.
+    MatrixNK g_dirs;
+    MatrixKK back;
+    const Scalar eps = std::numeric_limits<Scalar>::epsilon();
+    if (gauss_weight_) {
+      if constexpr (K > N) {
+        return fail(out, Status::kWeightNotPositiveDefinite, 0);  // more actuators than coordinates
+      } else {
+        Eigen::Matrix<Scalar, K, 1> s;
+        MatrixKK v;
+        g_dirs = lb;
+        if (!small_dense::jacobi_svd_in_place(g_dirs.data(), N, K, s.data(), v.data()))
+          return fail(out, Status::kNonFiniteResult, 0);
+        if (!(s(K - 1) > Scalar(K) * eps * s(0))) return fail(out, Status::kWeightNotPositiveDefinite, 0);
+        back = v * s.cwiseInverse().asDiagonal();  // u = V S^-1 (C U)^+ r
+      }
+    } else {
+      // G = L^-1 B Lw^-T: G^T = Lw^-1 (L^-1 B)^T.
+      Eigen::Matrix<Scalar, K, N> gt = lb.transpose();
+      small_dense::solve_lower_in_place(weight_factor_, gt);
+      g_dirs = gt.transpose();
+      back = MatrixKK::Identity();
+      small_dense::solve_lower_transposed_in_place(weight_factor_, back);  // Lw^-T
+    }
+    const Eigen::Matrix<Scalar, P, K> task = ct.transpose() * g_dirs;
+
+    // Thin SVD of the task matrix (or of its transpose, so that rows >= columns).
+    constexpr int kRows = K >= P ? K : P;
+    constexpr int kCols = K >= P ? P : K;
+    Eigen::Matrix<Scalar, kRows, kCols> w;
+    if constexpr (K >= P) w = task.transpose();
+    else w = task;
+    Eigen::Matrix<Scalar, kCols, 1> sigma;
+    Eigen::Matrix<Scalar, kCols, kCols> v;
+    if (!small_dense::jacobi_svd_in_place(w.data(), kRows, kCols, sigma.data(), v.data()))
+      return fail(out, Status::kNonFiniteResult, 0);
+    const Scalar relative =
+        (options_.solver.rank_tolerance > Scalar(0) ? options_.solver.rank_tolerance : Scalar(kRows) * eps) * sigma(0);
+    const Scalar floor = std::max(relative, options_.solver.min_singular_value);
+    int rank = 0;
+    bool near_singular = false;
+    Eigen::Matrix<Scalar, kCols, 1> inverse = Eigen::Matrix<Scalar, kCols, 1>::Zero();
+    for (int i = 0; i < kCols; ++i) {
+      if (sigma(i) > floor) {
+        inverse(i) = Scalar(1) / sigma(i);
+        ++rank;
+      } else if (sigma(i) > relative) {
+        near_singular = true;
+      }
+    }
+    // v = task^+ r for each part of r, then u = back v.
+    auto control_for = [&](const VectorP& r) -> VectorK {
+      VectorK x;
+      if constexpr (K >= P) x = w * (inverse.asDiagonal() * (v.transpose() * r));  // task^T = w S v^T
+      else x = v * (inverse.asDiagonal() * (w.transpose() * r));                      // task = w S v^T
+      return back * x;
+    };
+    out.control_closed_loop = control_for(-(terms_.constraint_matrix * a));
+    out.control_feedforward = control_for(terms_.constraint_rhs);
+    out.control_stabilizing = control_for(correction);
+    out.control = out.control_closed_loop + out.control_feedforward + out.control_stabilizing;
+    if (!out.control.allFinite()) return fail(out, Status::kNonFiniteResult, 0);
+
+    SolveDiagnostics<Scalar>& d = out.diagnostics;
+    d.rank = rank;
+    d.sigma_max = sigma(0);
+    d.sigma_min_kept = rank > 0 ? sigma(rank - 1) : Scalar(0);
+    d.condition_estimate = rank > 0 ? sigma(0) / sigma(rank - 1) : Scalar(0);
+    if (rank < P) d.warnings |= warning::kRankDeficient;
+    if (near_singular) d.warnings |= warning::kNearSingular;
+    if (d.condition_estimate > options_.solver.warn_condition) d.warnings |= warning::kIllConditioned;
+
+    // Actuator limits: u and its parts scaled as a whole.
+    for (int i = 0; i < K; ++i) {
+      const Scalar magnitude = std::abs(out.control(i));
+      if (magnitude > limit_(i)) out.saturation_scale = std::min(out.saturation_scale, limit_(i) / magnitude);
+    }
+    if (out.saturation_scale < Scalar(1)) {
+      const Scalar k = out.saturation_scale;
+      out.control *= k;
+      out.control_closed_loop *= k;
+      out.control_feedforward *= k;
+      out.control_stabilizing *= k;
+      out.control = out.control.cwiseMax(-limit_).cwiseMin(limit_);
+      d.warnings |= warning::kSaturated;
+    }
+    out.force = b_ * out.control;
+    out.closed_loop = b_ * out.control_closed_loop;
+    out.feedforward = b_ * out.control_feedforward;
+    out.stabilizing = b_ * out.control_stabilizing;
+    // q'' = a + A^-1 B u = a + L^-T (L^-1 B) u.
+    VectorN pushed = lb * out.control;
+    small_dense::solve_lower_transposed_in_place(l_, pushed);
+    out.acceleration = a + pushed;
+
+    // Which rows are met: |D_i q'' - g_i| against the residual tolerance at the row's own scale.
+    const VectorP g = terms_.constraint_rhs + correction;
+    out.row_residual = terms_.constraint_matrix * out.acceleration - g;
+    const Scalar acceleration2 = out.acceleration.squaredNorm();
+    for (int i = 0; i < P; ++i) {
+      const Scalar scale2 = g(i) * g(i) + terms_.constraint_matrix.row(i).squaredNorm() * acceleration2;
+      const Scalar tol = options_.solver.residual_tolerance;
+      if (out.row_residual(i) * out.row_residual(i) > tol * tol * scale2 && i < 64)
+        out.unmet_rows |= std::uint64_t{1} << i;
+    }
+    d.residual_norm = out.row_residual.norm();
+    if (out.unmet_rows != 0) d.warnings |= warning::kConstraintsNotMet;
+    return d.status;
+  }
+
+ private:
+  static Status fail(Output& out, Status status, std::uint32_t inputs) noexcept {
+    const VectorP e = out.constraint_error, e_rate = out.constraint_error_rate;
+    out = Output{};
+    out.constraint_error = e;
+    out.constraint_error_rate = e_rate;
+    out.diagnostics.status = status;
+    out.diagnostics.non_finite_inputs = inputs;
+    return status;
+  }
+
+  [[noreturn]] static void config_error(const char* problem) {
+#if defined(__cpp_exceptions)
+    throw std::invalid_argument(std::string("gausstrack::ActuatedController: ") + problem);
+#else
+    (void)problem;
+    __builtin_trap();
+#endif
+  }
+
+  M model_;
+  Options options_;
+  std::array<Stabilization<Scalar>, static_cast<std::size_t>(P)> row_gains_{};
+  VectorK limit_ = VectorK::Constant(std::numeric_limits<Scalar>::infinity());
+  bool gauss_weight_ = true;
+  MatrixKK weight_factor_ = MatrixKK::Identity();
+  TermsOf<M> terms_{};
+  MatrixNK b_ = MatrixNK::Zero();
+  Eigen::Matrix<Scalar, N, N> l_;
+};
+
+}  // namespace gausstrack
