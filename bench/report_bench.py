@@ -113,7 +113,7 @@ def control_law(d):
         if len(parts) == 3 and parts[1] not in models:
             models.append(parts[1])
     return (out + law_table(b, models) + targets(b, models) + solve_split(b, models) + phases(b, models)
-            + growth(b, models) + natural_form(b))
+            + growth(b, models) + natural_form(b) + actuation(b))
 
 
 def timed(b):
@@ -277,6 +277,27 @@ def natural_form(b):
         ratio = derived / hand
         out.append(f"| {m} | {ns(derived)} | {ns(hand)} | {ratio:.2f}x | {'yes' if ratio <= 1.5 else '**no**'} | "
                    + " | ".join("-" if math.isnan(v) else ns(v) for v in (jet, autodiff)) + " |")
+    return out + [""]
+
+
+def actuation(b):
+    """The actuated law (K actuators, Gauss's weight) beside the plain law on the same model, both
+    factoring A on every call."""
+    t = timed(b)
+    cases = sorted({k.split("/")[1] for k in b if k.startswith("actuation/") and k.endswith("/actuated")})
+    if not cases:
+        return []
+    out = ["## The actuated law", "",
+           "`ActuatedController` (the commands of K actuators, least u^T W u with Gauss's weight: an orthonormal "
+           "basis of the actuated directions and one SVD of the task matrix) beside `TrackingController` on the same model with "
+           "every coordinate actuated, both factoring A on every call.", "",
+           "| case | actuated | plain law, every coordinate | actuated / plain |", "|---|---|---|---|"]
+    for c in cases:
+        family = c.split("_")[0]
+        laws = [k for k in b if k.startswith(f"actuation/{family}_") and k.endswith("/law")]
+        actuated, law = t(f"actuation/{c}/actuated"), (t(laws[0]) if laws else math.nan)
+        out.append(f"| {c} | {ns(actuated)} | {'-' if math.isnan(law) else ns(law)} | "
+                   f"{'-' if math.isnan(law) else f'{actuated / law:.2f}x'} |")
     return out + [""]
 
 

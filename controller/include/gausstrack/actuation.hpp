@@ -18,9 +18,9 @@
 // part (from Baumgarte's correction), each mapped through the same pseudo-inverse.
 //
 // How it is computed, with A = L L^T (Cholesky) and C = D L^-T (so that D A^-1 B = C L^-1 B):
-// - Gauss's weight: the thin SVD L^-1 B = U S V^T gives W = V S^2 V^T, and with the symmetric
-//   root the scaled task matrix is C U V^T, so u = V S^-1 (C U)^+ r. Dependent columns of B
-//   (a singular value of L^-1 B at or below K eps times the largest) make W singular:
+// - Gauss's weight: L^-1 B = U R (Gram-Schmidt, twice per column) gives W = R^T R, so the scaled
+//   task matrix is C U (orthonormal actuated directions) and u = R^-1 (C U)^+ r. Dependent
+//   columns of B (a diagonal of R at or below K eps times the largest column) make W singular:
 //   Status::kWeightNotPositiveDefinite.
 // - A given weight W = Lw Lw^T (set_weight): u = Lw^-T (C L^-1 B Lw^-T)^+ r.
 // The pseudo-inverse is the one-sided Jacobi SVD of rank_revealing.hpp with the solver options'
@@ -79,8 +79,8 @@ struct ActuatedOutput {
 };
 
 /// The actuated law for an ActuatedModel: one evaluation of the model's terms and of B, Baumgarte's
-/// correction per row, one SVD of B's scaled directions (Gauss's weight) and one of the scaled
-/// task matrix. The solver options' strategy is not used (the task matrix is always factored by
+/// correction per row, an orthonormal basis of B's scaled directions (Gauss's weight) and one SVD
+/// of the scaled task matrix. The solver options' strategy is not used (the task matrix is always factored by
 /// the SVD); its tolerances are.
 template <ActuatedModel M>
 class ActuatedController {
@@ -193,13 +193,29 @@ class ActuatedController {
       if constexpr (K > N) {
         return fail(out, Status::kWeightNotPositiveDefinite, 0);  // more actuators than coordinates
       } else {
-        Eigen::Matrix<Scalar, K, 1> s;
-        MatrixKK v;
+        // L^-1 B = U R by Gram-Schmidt, each column orthogonalized twice (enough for orthogonality
+        // to rounding); W = R^T R.
         g_dirs = lb;
-        if (!small_dense::jacobi_svd_in_place(g_dirs.data(), N, K, s.data(), v.data()))
-          return fail(out, Status::kNonFiniteResult, 0);
-        if (!(s(K - 1) > Scalar(K) * eps * s(0))) return fail(out, Status::kWeightNotPositiveDefinite, 0);
-        back = v * s.cwiseInverse().asDiagonal();  // u = V S^-1 (C U)^+ r
+        MatrixKK r = MatrixKK::Zero();
+        const Scalar largest = lb.colwise().norm().maxCoeff();
+        for (int j = 0; j < K; ++j) {
+          for (int pass = 0; pass < 2; ++pass)
+            for (int i = 0; i < j; ++i) {
+              const Scalar c = g_dirs.col(i).dot(g_dirs.col(j));
+              r(i, j) += c;
+              g_dirs.col(j) -= c * g_dirs.col(i);
+            }
+          r(j, j) = g_dirs.col(j).norm();
+          if (!(r(j, j) > Scalar(K) * eps * largest)) return fail(out, Status::kWeightNotPositiveDefinite, 0);
+          g_dirs.col(j) /= r(j, j);
+        }
+        back = MatrixKK::Identity();  // R^-1 by back substitution: u = R^-1 (C U)^+ r
+        for (int c = 0; c < K; ++c)
+          for (int i = K - 1; i >= 0; --i) {
+            Scalar v = back(i, c);
+            for (int k = i + 1; k < K; ++k) v -= r(i, k) * back(k, c);
+            back(i, c) = v / r(i, i);
+          }
       }
     } else {
       // G = L^-1 B Lw^-T: G^T = Lw^-1 (L^-1 B)^T.
