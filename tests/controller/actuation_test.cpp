@@ -260,6 +260,27 @@ TEST(Actuation, AnUnactuatedRowIsNamedAndRedundantActuatorsShareByTheWeight) {
   EXPECT_FALSE(redundant.set_weight(Eigen::Vector2d(1.0, -4.0).asDiagonal().toDenseMatrix()));
 }
 
+// With a hold the commands are the actuated law's at the middle of the hold interval, at the state
+// predicted through the acceleration the measured state's commands give (as TrackingController).
+TEST(Actuation, TheHeldCommandsAreTheLawAtThePredictedMidpoint) {
+  ControllerOptions<double> o;
+  o.stabilization = {1.0, 20.0};
+  const double h = 1e-3, d = 2e-4, t = 0.3, tau = d + h / 2;
+  const Eigen::Vector2d q(1.02, 0.97), qd(8.1, 2.2);
+  ActuatedController<Duffing1> held(Duffing1{}, o), plain(Duffing1{}, o);
+  ASSERT_TRUE(held.set_hold({h, d}));
+  ActuatedController<Duffing1>::Output out, at_t, at_m;
+  ASSERT_EQ(held.compute(q, qd, t, out), Status::kOk);
+  ASSERT_EQ(plain.compute(q, qd, t, at_t), Status::kOk);
+  const Eigen::Vector2d q_m = q + tau * qd + 0.5 * tau * tau * at_t.acceleration;
+  const Eigen::Vector2d qd_m = qd + tau * at_t.acceleration;
+  ASSERT_EQ(plain.compute(q_m, qd_m, t + tau, at_m), Status::kOk);
+  EXPECT_NEAR(out.control(0), at_m.control(0), 1e-12 * (1 + std::abs(at_m.control(0))));
+  EXPECT_GT(std::abs(out.control(0) - at_t.control(0)), 1e-6 * std::abs(at_t.control(0)));  // the hold moved it
+  EXPECT_EQ(out.constraint_error, at_t.constraint_error);
+  EXPECT_FALSE(out.diagnostics.has(warning::kHoldAtMeasuredState));
+}
+
 TEST(Actuation, ANonFiniteActuationIsRefusedWithZeroOutputs) {
   GivenSystem<2, 1, 1> sys;
   sys.D << 1, -1;

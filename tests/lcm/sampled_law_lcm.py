@@ -33,7 +33,7 @@ from fault_campaign import wait_ready  # same directory
 
 RATE = 1000
 WINDOW_S = 0.3  # six time constants of the stabilization (1 / omega = 50 ms): a disturbance decays to 2 %
-MIN_CLEAN = 0.25
+MIN_CLEAN = 0.10  # 30 of 300 samples, 0.3 s of the trajectory at least
 STALL_MS = 10
 
 

@@ -142,7 +142,22 @@ class ActuatedController {
     return true;
   }
 
-  /// Actuator commands for state (q, q', t). On failure every output is zero.
+  /// The sampled-data hold, as TrackingController::set_hold (the same prediction, through the
+  /// acceleration the actuated commands give). Returns false, changing nothing, unless period and
+  /// delay are finite and >= 0.
+  bool set_hold(const Hold<Scalar>& hold) noexcept {
+    if (!std::isfinite(hold.period) || !(hold.period >= Scalar(0)) || !std::isfinite(hold.delay) ||
+        !(hold.delay >= Scalar(0)))
+      return false;
+    options_.hold = hold;
+    return true;
+  }
+  const Hold<Scalar>& hold() const noexcept { return options_.hold; }
+
+  /// Actuator commands for state (q, q', t), or with a hold the commands to hold over
+  /// [t + delay, t + delay + period] (warning::kHoldAtMeasuredState when the predicted state
+  /// cannot be evaluated). On failure every output is zero. The output's constraint_error and
+  /// constraint_error_rate are the measured state's.
   template <typename Dq, typename Dqd>
   Status compute(const Eigen::MatrixBase<Dq>& q, const Eigen::MatrixBase<Dqd>& qd, Scalar t,
                  Output& out) noexcept {
@@ -150,6 +165,30 @@ class ActuatedController {
     if (!q.allFinite() || !qd.allFinite() || !std::isfinite(t)) return fail(out, Status::kNonFiniteInput, input::kState);
     const VectorN qv = q;
     const VectorN qdv = qd;
+    const Status measured = evaluate(qv, qdv, t, out);
+    if (!options_.hold.enabled()) return measured;
+    if (failed(measured)) {
+      prediction_.forget();
+      return measured;
+    }
+    const VectorP e = out.constraint_error, e_rate = out.constraint_error_rate;
+    VectorN q_m, qd_m;
+    prediction_.predict(options_.hold, qv, qdv, t, out.acceleration, q_m, qd_m);
+    Status status = q_m.allFinite() && qd_m.allFinite() ? evaluate(q_m, qd_m, t + options_.hold.lead(), out)
+                                                        : Status::kNonFiniteInput;
+    if (failed(status)) {
+      status = evaluate(qv, qdv, t, out);
+      out.diagnostics.warnings |= warning::kHoldAtMeasuredState;
+    }
+    out.constraint_error = e;
+    out.constraint_error_rate = e_rate;
+    return status;
+  }
+
+ private:
+  // The actuated law at (q, q', t).
+  Status evaluate(const VectorN& qv, const VectorN& qdv, Scalar t, Output& out) noexcept {
+    out = Output{};
     evaluate_model(model_, qv, qdv, t, terms_);
     model_.actuation(qv, t, b_);
     out.constraint_error = terms_.constraint_error;
@@ -311,7 +350,6 @@ class ActuatedController {
     return d.status;
   }
 
- private:
   static Status fail(Output& out, Status status, std::uint32_t inputs) noexcept {
     const VectorP e = out.constraint_error, e_rate = out.constraint_error_rate;
     out = Output{};
@@ -340,6 +378,22 @@ class ActuatedController {
   TermsOf<M> terms_{};
   MatrixNK b_ = MatrixNK::Zero();
   Eigen::Matrix<Scalar, N, N> l_;
+  HoldPrediction<N, Scalar> prediction_;  ///< the hold's memory
 };
+
+/// The controller for model M: ActuatedController when M declares actuators, else
+/// TrackingController (every coordinate actuated). Both compute(q, qd, t, out) into an output
+/// with force, closed_loop, feedforward, stabilizing, saturation_scale and diagnostics, and take
+/// set_stabilization and set_hold.
+template <Model M>
+struct LawForModel {
+  using type = TrackingController<M>;
+};
+template <ActuatedModel M>
+struct LawForModel<M> {
+  using type = ActuatedController<M>;
+};
+template <Model M>
+using LawFor = typename LawForModel<M>::type;
 
 }  // namespace gausstrack

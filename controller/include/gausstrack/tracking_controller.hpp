@@ -48,6 +48,44 @@ struct Hold {
   Scalar lead() const noexcept { return delay + period / Scalar(2); }
 };
 
+/// The hold's prediction, shared by the controllers: from the measured state and the constrained
+/// acceleration the law computed there, the state at the middle of the hold interval (Hold's
+/// formula), with the jerk from the previous sample of the same motion. Keeps the latest two
+/// samples' accelerations; a call for the same t again (a repeated call) keeps the previous
+/// sample, so that it answers as the first did; an earlier t starts a new motion.
+template <int N, typename Scalar>
+class HoldPrediction {
+ public:
+  using VectorN = Eigen::Matrix<Scalar, N, 1>;
+
+  /// Writes (q_m, q'_m) at t + hold.lead() and remembers a for the next call.
+  void predict(const Hold<Scalar>& hold, const VectorN& q, const VectorN& qd, Scalar t, const VectorN& a,
+               VectorN& q_m, VectorN& qd_m) noexcept {
+    if (!has_latest_ || t != t_latest_) {
+      has_previous_ = has_latest_ && t > t_latest_;
+      a_previous_ = a_latest_;
+      t_previous_ = t_latest_;
+    }
+    a_latest_ = a;
+    t_latest_ = t;
+    has_latest_ = true;
+    // The jerk from the acceleration of the previous sample (at most two periods earlier); else none.
+    VectorN jerk = VectorN::Zero();
+    const Scalar since = t - t_previous_;
+    if (has_previous_ && since > Scalar(0) && since <= Scalar(2) * hold.period) jerk = (a - a_previous_) / since;
+    const Scalar tau = hold.lead();
+    q_m = q + tau * qd + (tau * tau / Scalar(2)) * a + (tau * tau * tau / Scalar(6)) * jerk;
+    qd_m = qd + tau * a + (tau * tau / Scalar(2)) * jerk;
+  }
+  /// After a failed call: the next one starts a new motion.
+  void forget() noexcept { has_latest_ = has_previous_ = false; }
+
+ private:
+  VectorN a_latest_ = VectorN::Zero(), a_previous_ = VectorN::Zero();
+  Scalar t_latest_ = Scalar(0), t_previous_ = Scalar(0);
+  bool has_latest_ = false, has_previous_ = false;
+};
+
 template <typename Scalar>
 struct ControllerOptions {
   SolverOptions<Scalar> solver{};
@@ -182,29 +220,13 @@ class TrackingController {
     const Status measured = evaluate(qv, qdv, t, out);
     if (!options_.hold.enabled()) return measured;
     if (failed(measured)) {
-      has_latest_ = has_previous_ = false;
+      prediction_.forget();
       return measured;
     }
     const Scalar tau = options_.hold.lead();
     const VectorP e = out.constraint_error, e_rate = out.constraint_error_rate;
-    // The jerk from the acceleration of the previous sample of the same motion (at most two
-    // periods earlier); else none. A call for the same t again (a repeated call) keeps the
-    // previous sample, so that it answers as the first did; an earlier t starts a new motion.
-    const VectorN a_k = out.acceleration;
-    if (!has_latest_ || t != t_latest_) {
-      has_previous_ = has_latest_ && t > t_latest_;
-      a_previous_ = a_latest_;
-      t_previous_ = t_latest_;
-    }
-    a_latest_ = a_k;
-    t_latest_ = t;
-    has_latest_ = true;
-    VectorN jerk = VectorN::Zero();
-    const Scalar since = t - t_previous_;
-    if (has_previous_ && since > Scalar(0) && since <= Scalar(2) * options_.hold.period)
-      jerk = (a_k - a_previous_) / since;
-    const VectorN q_m = qv + tau * qdv + (tau * tau / Scalar(2)) * a_k + (tau * tau * tau / Scalar(6)) * jerk;
-    const VectorN qd_m = qdv + tau * a_k + (tau * tau / Scalar(2)) * jerk;
+    VectorN q_m, qd_m;
+    prediction_.predict(options_.hold, qv, qdv, t, out.acceleration, q_m, qd_m);
     Status status = q_m.allFinite() && qd_m.allFinite() ? evaluate(q_m, qd_m, t + tau, out) : Status::kNonFiniteInput;
     if (failed(status)) {
       status = evaluate(qv, qdv, t, out);
@@ -279,11 +301,7 @@ class TrackingController {
   std::array<Stabilization<Scalar>, static_cast<std::size_t>(P)> row_gains_{};
   VectorN force_limit_ = VectorN::Constant(std::numeric_limits<Scalar>::infinity());
   Terms terms_{};
-  // The hold's memory: the constrained acceleration at the latest sample's measured state, and at
-  // the sample before it.
-  VectorN a_latest_ = VectorN::Zero(), a_previous_ = VectorN::Zero();
-  Scalar t_latest_ = Scalar(0), t_previous_ = Scalar(0);
-  bool has_latest_ = false, has_previous_ = false;
+  HoldPrediction<N, Scalar> prediction_;  ///< the hold's memory
   ConstraintSolver<N, P, Scalar, kMassMatrixOf<M>> solver_;
   ConstraintSolution<N, P, Scalar> solution_;
 };

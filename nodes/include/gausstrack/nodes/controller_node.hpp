@@ -39,7 +39,7 @@
 #include "gausstrack/nodes/latency_recorder.hpp"
 #include "gausstrack/nodes/message_log.hpp"
 #include "gausstrack/nodes/process.hpp"
-#include "gausstrack/tracking_controller.hpp"
+#include "gausstrack/actuation.hpp"
 
 namespace gausstrack::nodes {
 
@@ -58,7 +58,7 @@ template <Model M>
 class ControllerNode {
  public:
   static constexpr int N = M::kDof;
-  using Controller = TrackingController<M>;
+  using Controller = LawFor<M>;  ///< ActuatedController for a model with actuators
   using Scalar = typename Controller::Scalar;
 
   /// `compute_times`: how many compute times to keep for percentiles (later ones are counted

@@ -45,7 +45,7 @@ template <Model M>
 class ModelControlLaw final : public ControlLaw {
  public:
   using V = Eigen::Matrix<double, M::kDof, 1>;
-  explicit ModelControlLaw(TrackingController<M> controller) : controller_(std::move(controller)) {}
+  explicit ModelControlLaw(LawFor<M> controller) : controller_(std::move(controller)) {}
   int dof() const noexcept override { return M::kDof; }
   Status compute(const double* q, const double* qd, double t, double* force) noexcept override {
     const Status s = controller_.compute(Eigen::Map<const V>(q), Eigen::Map<const V>(qd), t, out_);
@@ -59,8 +59,8 @@ class ModelControlLaw final : public ControlLaw {
   }
 
  private:
-  TrackingController<M> controller_;
-  typename TrackingController<M>::Output out_;
+  LawFor<M> controller_;  ///< ActuatedController for a model with actuators
+  typename LawFor<M>::Output out_;
 };
 
 /// A plant's own dynamics, A(q, q', t) q'' + f = Q + u, at any dimension.

@@ -11,6 +11,7 @@
 
 #include "gausstrack/model.hpp"
 #include "gausstrack/tracking/config.hpp"
+#include "gausstrack/actuation.hpp"
 #include "gausstrack/tracking_controller.hpp"
 
 namespace gausstrack::tracking {
@@ -53,9 +54,10 @@ void apply_parameters(M& m, const std::vector<ModelParameter>& parameters,
 }
 
 /// The controller the tracking section describes for model type M, starting from `model`'s
-/// parameters. Throws ConfigError for options the controller refuses.
+/// parameters: an ActuatedController when M declares actuators (force_limit then limits each
+/// actuator), else a TrackingController. Throws ConfigError for options the controller refuses.
 template <Model M>
-TrackingController<M> make_controller(const TrackingSpec& spec, M model = {}) {
+LawFor<M> make_controller(const TrackingSpec& spec, M model = {}) {
   apply_parameters(model, spec.parameters, spec.model);
   ControllerOptions<typename M::Scalar> o;
   o.solver.strategy = spec.strategy;
@@ -65,9 +67,10 @@ TrackingController<M> make_controller(const TrackingSpec& spec, M model = {}) {
   if (spec.hold == HoldLaw::kMidpoint)
     o.hold = {static_cast<typename M::Scalar>(spec.period), static_cast<typename M::Scalar>(spec.delay)};
   if (const char* error = o.validate()) throw ConfigError(spec.where + ": " + error);
-  TrackingController<M> controller(model, o);
-  controller.set_force_limit(
-      TrackingController<M>::VectorN::Constant(static_cast<typename M::Scalar>(spec.force_limit)));
+  LawFor<M> controller(model, o);
+  const auto limit = static_cast<typename M::Scalar>(spec.force_limit);
+  if constexpr (ActuatedModel<M>) controller.set_actuator_limit(LawFor<M>::VectorK::Constant(limit));
+  else controller.set_force_limit(LawFor<M>::VectorN::Constant(limit));
   return controller;
 }
 
