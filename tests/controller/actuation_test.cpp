@@ -17,6 +17,7 @@
 #include "allocation_counter.hpp"
 #include "gausstrack/actuation.hpp"
 #include "gausstrack/systems/cart_double_pendulum.hpp"
+#include "gausstrack/systems/cart_pole.hpp"
 #include "gausstrack/systems/coupled_duffing.hpp"
 #include "gausstrack/systems/duffing_chain.hpp"
 #include "gausstrack/systems/nonholonomic_particle.hpp"
@@ -279,6 +280,85 @@ TEST(Actuation, TheHeldCommandsAreTheLawAtThePredictedMidpoint) {
   EXPECT_GT(std::abs(out.control(0) - at_t.control(0)), 1e-6 * std::abs(at_t.control(0)));  // the hold moved it
   EXPECT_EQ(out.constraint_error, at_t.constraint_error);
   EXPECT_FALSE(out.diagnostics.has(warning::kHoldAtMeasuredState));
+}
+
+// Columns of B that are dependent (the second three times the first) make Gauss's weight
+// singular: refused, not answered with a command of 1 / eps along B's null space.
+TEST(Actuation, DependentActuatorsAreRefusedUnderGausssWeight) {
+  RandomSource<double> rng(19);
+  GivenSystem<3, 1, 2> sys = GivenSystem<3, 1, 2>::random(rng);
+  sys.B.col(1) = 3.0 * sys.B.col(0);
+  ActuatedController<GivenSystem<3, 1, 2>> c(sys);
+  ActuatedController<GivenSystem<3, 1, 2>>::Output out;
+  EXPECT_EQ(c.compute(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 0.0, out), Status::kWeightNotPositiveDefinite);
+  EXPECT_TRUE(out.control.isZero(0));
+}
+
+// Actuator limits scale the commands as a whole and say so; the force is B times the scaled u.
+TEST(Actuation, ActuatorLimitsScaleTheCommands) {
+  ActuatedController<Duffing1> free_law, limited;
+  ActuatedController<Duffing1>::Output f, l;
+  const Eigen::Vector2d q(1.3, 0.2), qd(3.0, -1.0);
+  ASSERT_EQ(free_law.compute(q, qd, 0.4, f), Status::kOk);
+  ASSERT_GT(std::abs(f.control(0)), 1.0);
+  ASSERT_TRUE(limited.set_actuator_limit(Eigen::Matrix<double, 1, 1>(0.5)));
+  ASSERT_EQ(limited.compute(q, qd, 0.4, l), Status::kOk);
+  EXPECT_TRUE(l.diagnostics.has(warning::kSaturated));
+  EXPECT_NEAR(std::abs(l.control(0)), 0.5, 1e-15);
+  EXPECT_NEAR(l.saturation_scale, 0.5 / std::abs(f.control(0)), 1e-15);
+  EXPECT_EQ(l.force(0), l.control(0));
+  EXPECT_FALSE(limited.set_actuator_limit(Eigen::Matrix<double, 1, 1>(0.0)));
+}
+
+// The cart-pole's pendulum nearly horizontal: the cart's force barely reaches the angle
+// (D A^-1 B = -m l cos theta / det A). With one row and one actuator the task's own condition is
+// 1; measured against D A^(-1/2) the loss of reach is flagged.
+TEST(Actuation, ActuatorsThatBarelyReachTheRowAreFlagged) {
+  ActuatedController<systems::CartPole<double>> c;
+  ActuatedController<systems::CartPole<double>>::Output out;
+  ASSERT_EQ(c.compute(Eigen::Vector2d(0.0, 0.3), Eigen::Vector2d(0.0, 1.0), 0.0, out), Status::kOk);
+  EXPECT_FALSE(out.diagnostics.has(warning::kIllConditioned));
+  ASSERT_EQ(c.compute(Eigen::Vector2d(0.0, std::acos(1e-12)), Eigen::Vector2d(0.0, 1.0), 0.0, out), Status::kOk);
+  EXPECT_TRUE(out.diagnostics.has(warning::kIllConditioned)) << out.diagnostics.condition_estimate;
+}
+
+// The cart-pole's A, f and Q against its Lagrangian, differentiated numerically: T from the bob's
+// velocity (x' + l cos theta theta', l sin theta theta'), V = -m g l cos theta;
+// A = d2T/dqd2, f = (d/dq dT/dqd) qd - dT/dq, Q = -dV/dq.
+TEST(Actuation, CartPoleTermsAreItsLagrangians) {
+  const systems::CartPole<double> m;
+  auto kinetic = [&](const Eigen::Vector2d& q, const Eigen::Vector2d& qd) {
+    const double vx = qd(0) + m.length * std::cos(q(1)) * qd(1), vy = m.length * std::sin(q(1)) * qd(1);
+    return 0.5 * m.cart_mass * qd(0) * qd(0) + 0.5 * m.mass * (vx * vx + vy * vy);
+  };
+  auto potential = [&](const Eigen::Vector2d& q) { return -m.mass * m.gravity * m.length * std::cos(q(1)); };
+  auto momentum = [&](const Eigen::Vector2d& q, const Eigen::Vector2d& qd) {  // dT/dqd, exact for a quadratic
+    Eigen::Vector2d p;
+    for (int i = 0; i < 2; ++i) {
+      const Eigen::Vector2d e = Eigen::Vector2d::Unit(i);
+      p(i) = (kinetic(q, qd + e) - kinetic(q, qd - e)) / 2;
+    }
+    return p;
+  };
+  RandomSource<double> rng(23);
+  for (int k = 0; k < 10; ++k) {
+    const Eigen::Vector2d q = 2 * rng.matrix<2, 1>(), qd = 2 * rng.matrix<2, 1>();
+    ModelTerms<2, 1, double> terms;
+    m.evaluate(q, qd, 0.0, terms);
+    const double h = 1e-5;
+    Eigen::Matrix2d a, dp_dq;
+    Eigen::Vector2d dt_dq, dv_dq;
+    for (int j = 0; j < 2; ++j) {
+      const Eigen::Vector2d e = Eigen::Vector2d::Unit(j);
+      a.col(j) = (momentum(q, qd + e) - momentum(q, qd - e)) / 2;
+      dp_dq.col(j) = (momentum(q + h * e, qd) - momentum(q - h * e, qd)) / (2 * h);
+      dt_dq(j) = (kinetic(q + h * e, qd) - kinetic(q - h * e, qd)) / (2 * h);
+      dv_dq(j) = (potential(q + h * e) - potential(q - h * e)) / (2 * h);
+    }
+    EXPECT_LT((terms.mass_matrix - a).norm(), 1e-9);
+    EXPECT_LT((terms.nonlinear_force - (dp_dq * qd - dt_dq)).norm(), 1e-7);
+    EXPECT_LT((terms.applied_force + dv_dq).norm(), 1e-7);
+  }
 }
 
 TEST(Actuation, ANonFiniteActuationIsRefusedWithZeroOutputs) {

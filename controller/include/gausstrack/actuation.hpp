@@ -245,7 +245,9 @@ class ActuatedController {
               g_dirs.col(j) -= c * g_dirs.col(i);
             }
           r(j, j) = g_dirs.col(j).norm();
-          if (!(r(j, j) > Scalar(K) * eps * largest)) return fail(out, Status::kWeightNotPositiveDefinite, 0);
+          // Columns dependent to within sqrt(eps) (exactly dependent ones leave rounding here):
+          // W's condition would exceed 1 / eps.
+          if (!(r(j, j) > std::sqrt(eps) * largest)) return fail(out, Status::kWeightNotPositiveDefinite, 0);
           g_dirs.col(j) /= r(j, j);
         }
         back = MatrixKK::Identity();  // R^-1 by back substitution: u = R^-1 (C U)^+ r
@@ -276,8 +278,13 @@ class ActuatedController {
     Eigen::Matrix<Scalar, kCols, kCols> v;
     if (!small_dense::jacobi_svd_in_place(w.data(), kRows, kCols, sigma.data(), v.data()))
       return fail(out, Status::kNonFiniteResult, 0);
+    // With Gauss's weight the task's singular values are those of D A^(-1/2) along the actuated
+    // directions: they are measured against D A^(-1/2) itself (its Frobenius norm), so that
+    // actuators that barely reach the rows (one row, one actuator, its reach vanishing) show as
+    // ill-conditioned instead of a condition of 1.
+    const Scalar reach = gauss_weight_ ? std::max(sigma(0), ct.norm()) : sigma(0);
     const Scalar relative =
-        (options_.solver.rank_tolerance > Scalar(0) ? options_.solver.rank_tolerance : Scalar(kRows) * eps) * sigma(0);
+        (options_.solver.rank_tolerance > Scalar(0) ? options_.solver.rank_tolerance : Scalar(kRows) * eps) * reach;
     const Scalar floor = std::max(relative, options_.solver.min_singular_value);
     int rank = 0;
     bool near_singular = false;
@@ -307,7 +314,7 @@ class ActuatedController {
     d.rank = rank;
     d.sigma_max = sigma(0);
     d.sigma_min_kept = rank > 0 ? sigma(rank - 1) : Scalar(0);
-    d.condition_estimate = rank > 0 ? sigma(0) / sigma(rank - 1) : Scalar(0);
+    d.condition_estimate = rank > 0 ? reach / sigma(rank - 1) : Scalar(0);
     if (rank < P) d.warnings |= warning::kRankDeficient;
     if (near_singular) d.warnings |= warning::kNearSingular;
     if (d.condition_estimate > options_.solver.warn_condition) d.warnings |= warning::kIllConditioned;
@@ -334,6 +341,7 @@ class ActuatedController {
     VectorN pushed = lb * out.control;
     small_dense::solve_lower_transposed_in_place(l_, pushed);
     out.acceleration = a + pushed;
+    if (!out.force.allFinite() || !out.acceleration.allFinite()) return fail(out, Status::kNonFiniteResult, 0);
 
     // Which rows are met: |D_i q'' - g_i| against the residual tolerance at the row's own scale.
     const VectorP g = terms_.constraint_rhs + correction;
@@ -342,8 +350,8 @@ class ActuatedController {
     for (int i = 0; i < P; ++i) {
       const Scalar scale2 = g(i) * g(i) + terms_.constraint_matrix.row(i).squaredNorm() * acceleration2;
       const Scalar tol = options_.solver.residual_tolerance;
-      if (out.row_residual(i) * out.row_residual(i) > tol * tol * scale2 && i < 64)
-        out.unmet_rows |= std::uint64_t{1} << i;
+      const bool met = std::abs(out.row_residual(i)) <= tol * std::sqrt(scale2);  // false for NaN
+      if (!met && i < 64) out.unmet_rows |= std::uint64_t{1} << i;
     }
     d.residual_norm = out.row_residual.norm();
     if (out.unmet_rows != 0) d.warnings |= warning::kConstraintsNotMet;

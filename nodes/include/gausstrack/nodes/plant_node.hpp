@@ -257,6 +257,8 @@ class PlantNode {
         if (held_failed_) hold_.setZero();
         else hold_ = answers_.col(static_cast<Eigen::Index>(slot(chosen)));
       } else {
+        // No new answer this period (also when the lag just grew and the answer held is the one
+        // due: periods.csv tells those apart).
         ++counts_.commands_missing;
         if (watchdog_.check(now) && !o_.safe_hold) {
           hold_.setZero();
@@ -373,7 +375,10 @@ class PlantNode {
     if (!o_.lockstep && k + hold_lag_.lag() <= last_published_) ++counts_.commands_late;
     const std::int64_t sent = published_at_[static_cast<std::size_t>(k) % published_at_.size()];
     round_trip_us_.add(static_cast<double>(received_ns - sent) * 1e-3);
-    if (!o_.lockstep) hold_lag_.record(received_ns - sent);
+    // The lag counts from the period's deadline: the work before the state went out is added. The
+    // awaited first answer (a cold start) is left out.
+    if (!o_.lockstep && !exact_)
+      hold_lag_.record(received_ns - sent + sent_after_deadline_[static_cast<std::size_t>(k) % sent_after_deadline_.size()]);
     compute_ns_.add(static_cast<double>(incoming_.compute_ns));
     answered_sequences_.add(static_cast<double>(k));
     latest_failed_ = incoming_.status != 0;  // any status but kOk: no answer, zero force
@@ -400,7 +405,7 @@ class PlantNode {
   const LatencyRecorder& deadline_work_us() const noexcept { return deadline_work_us_; }
   /// Real time: per period from the first, the hold lag in periods with which it applied answers
   /// (HoldLag; 0 for the first period, whose answer was awaited) and the state whose answer it
-  /// held (-1: none yet). An answer is missing in period p when p - applied state > the lag.
+  /// held (-1: none yet). Period p held the answer due when p - applied state <= the lag.
   const LatencyRecorder& hold_lag_periods() const noexcept { return hold_lag_periods_; }
   const LatencyRecorder& applied_states() const noexcept { return applied_states_; }
   const PlantNodeOptions& options() const noexcept { return o_; }
@@ -489,6 +494,8 @@ class PlantNode {
                                        Eigen::Map<const Eigen::VectorXd>(qd.data(), n), buffer_.data(),
                                        buffer_.size());
     last_published_ = period;
+    sent_after_deadline_[static_cast<std::size_t>(period) % sent_after_deadline_.size()] =
+        o_.lockstep ? 0 : std::max<std::int64_t>(0, monotonic_ns() - scheduler_.deadline(period));
     send_state();
     ++counts_.states_published;
   }
@@ -531,6 +538,7 @@ class PlantNode {
   std::array<std::uint8_t, kMessageBufferBytes> buffer_{};
   int state_bytes_ = 0;
   std::array<std::int64_t, 4096> published_at_{};  ///< wall clock [ns] each state was sent
+  std::array<std::int64_t, 4096> sent_after_deadline_{};  ///< [ns] from its period's deadline
   std::int64_t awaited_ = -1, answered_ = -1, last_published_ = -1, last_applied_ = -1;
   std::int64_t hold_delay_ns_ = 0;
   HoldLag hold_lag_;
