@@ -11,7 +11,7 @@
 //   of no force. Between deadlines it services LCM; round trips are measured from the state's
 //   publication to the kernel's receive timestamp of the command (LCM's recv_utime). The command
 //   answering state k acts from period k + L (zero-order hold), L the hold lag (HoldLag: one more
-//   than the 95th percentile of recent round trips in whole periods; 1 while they are shorter
+//   than the 75th percentile of recent round trips in whole periods; 1 while they are shorter
 //   than a period). Each state reports L periods as its hold_delay_ns, so the controller knows
 //   the interval its answer acts on. An answer that comes before its period waits for it; at
 //   each period the plant applies the answer due, or when it has not come the newest one older
@@ -122,9 +122,12 @@ class Watchdog {
 
 /// The lag, in whole periods, with which a real-time plant applies answers: the command answering
 /// the state of period k acts from period k + lag(). The round trips of the last kWindow commands
-/// are kept in whole periods; lag() is one more than their 95th percentile, so that a few answers
-/// held back by a stall do not move it and a delay that lasts does. 1 before any round trip is
-/// known (an answer acts from the next period); at most kMaxLag periods and at most 1 s.
+/// (from their period's deadline) are kept in whole periods; lag() is one more than their 75th
+/// percentile: a delay that lasts moves it, while the burst of long round trips a stall of the
+/// machine leaves (tens of answers) does not, so the controller does not predict over a stall's
+/// length for the next quarter second (answers held back that long are applied late instead).
+/// 1 before any round trip is known (an answer acts from the next period); at most kMaxLag
+/// periods and at most 1 s.
 class HoldLag {
  public:
   static constexpr int kMaxLag = 32;
@@ -145,7 +148,7 @@ class HoldLag {
   }
   int lag() const noexcept {
     if (recorded_ == 0) return 1;
-    const int needed = (recorded_ * 95 + 99) / 100;  // ceil(0.95 n)
+    const int needed = (recorded_ * 3 + 3) / 4;  // ceil(0.75 n)
     int cumulative = 0, bin = 0;
     while (bin < kMaxLag - 1 && (cumulative += counts_[static_cast<std::size_t>(bin)]) < needed) ++bin;
     return std::min(bin + 1, longest_);
