@@ -35,6 +35,18 @@ Plant::Plant(const Scene& s, const RunOptions& o) : n_(s.dof()) {
     }
   }
   constraints_ = s.constraints;
+  if (model_) model_rows_ = model_->physical_rows();
+  const int p = constraint_rows();
+  rows_.D.setZero(p, n_);
+  rows_.g.setZero(p);
+  rows_.e.setZero(p);
+  rows_.e_rate.setZero(p);
+  rows_.holonomic.assign(static_cast<std::size_t>(p), 0);
+  for (int k = 0; k < p; ++k)
+    rows_.holonomic[static_cast<std::size_t>(k)] =
+        k < static_cast<int>(constraints_.size())
+            ? constraints_[static_cast<std::size_t>(k)].kind == ConstraintKind::kPendulumLength
+            : model_->physical_holonomic(k - static_cast<int>(constraints_.size()));
   A_.setZero(n_, n_);
   f_.setZero(n_);
   Q_.setZero(n_);
@@ -96,6 +108,19 @@ void Plant::constraint_row(const ConstraintSpec& c, const Eigen::Ref<const V>& q
   }
 }
 
+void Plant::gather_rows(const V& q, const V& qd, double t) {
+  const int listed = static_cast<int>(constraints_.size());
+  for (int k = 0; k < listed; ++k) {
+    const ConstraintSpec& c = constraints_[static_cast<std::size_t>(k)];
+    constraint_row(c, q, qd, row_, rows_.g(k));
+    rows_.D.row(k) = row_;
+    // Each listed constraint has phi_t = 0 and psi = D q'.
+    rows_.e(k) = c.kind == ConstraintKind::kPendulumLength ? position_residual(c, q) : 0.0;
+    rows_.e_rate(k) = row_.dot(qd);
+  }
+  if (model_rows_ > 0) model_->physical(q, qd, t, listed, rows_.D, rows_.g, rows_.e, rows_.e_rate);
+}
+
 void Plant::acceleration(const V& q, const V& qd, double t, const V& u, RunSummary& stats, V& qdd) {
   V& rhs = force_;
   applied_force(q, qd, t, stats, rhs);
@@ -104,7 +129,7 @@ void Plant::acceleration(const V& q, const V& qd, double t, const V& u, RunSumma
     model_->evaluate(q, qd, t, A_, f_, Q_);
     rhs += Q_ - f_;
   }
-  const int p = static_cast<int>(constraints_.size());
+  const int p = constraint_rows();
   if (p == 0) {
     if (!model_) {
       qdd = rhs.cwiseQuotient(mass_);
@@ -121,13 +146,10 @@ void Plant::acceleration(const V& q, const V& qd, double t, const V& u, RunSumma
   V& b = kkt_rhs_;
   b.resize(n_ + p);
   b.head(n_) = rhs;
-  for (int k = 0; k < p; ++k) {
-    double g = 0;
-    constraint_row(constraints_[static_cast<std::size_t>(k)], q, qd, row_, g);
-    kkt_.block(n_ + k, 0, 1, n_) = row_;
-    kkt_.block(0, n_ + k, n_, 1) = row_.transpose();
-    b(n_ + k) = g;
-  }
+  gather_rows(q, qd, t);
+  kkt_.block(n_, 0, p, n_) = rows_.D;
+  kkt_.block(0, n_, n_, p) = rows_.D.transpose();
+  b.tail(p) = rows_.g;
   // Rank-revealing, so that a configuration where the rows lose rank still gives the
   // least-squares multipliers rather than a division by zero.
   kkt_solver_.compute(kkt_);
@@ -136,22 +158,23 @@ void Plant::acceleration(const V& q, const V& qd, double t, const V& u, RunSumma
 }
 
 bool Plant::project(Eigen::VectorXd& x, double t, RunSummary& stats) {
-  if (constraints_.empty() || !x.allFinite()) return x.allFinite();
+  if (!has_constraints() || !x.allFinite()) return x.allFinite();
   ++stats.projections;
-  Eigen::Ref<V> q = x.head(n_), qd = x.tail(n_);
-  const int p = static_cast<int>(constraints_.size());
+  const int p = constraint_rows();
   M D(p, n_);
   V r(p);
   auto rows = [&](bool holonomic_only) {
-    double g = 0;
+    gather_rows(x.head(n_), x.tail(n_), t);
     for (int k = 0; k < p; ++k) {
-      const ConstraintSpec& c = constraints_[static_cast<std::size_t>(k)];
-      constraint_row(c, q, qd, row_, g);
-      const bool holonomic = c.kind == ConstraintKind::kPendulumLength;
-      D.row(k) = holonomic_only && !holonomic ? Eigen::RowVectorXd::Zero(n_) : row_;
-      r(k) = holonomic_only ? (holonomic ? position_residual(c, q) : 0.0) : row_.dot(qd);
+      const bool holonomic = rows_.holonomic[static_cast<std::size_t>(k)] != 0;
+      if (holonomic_only && !holonomic)
+        D.row(k).setZero();
+      else
+        D.row(k) = rows_.D.row(k);
+      r(k) = holonomic_only ? (holonomic ? rows_.e(k) : 0.0) : rows_.e_rate(k);
     }
   };
+  Eigen::Ref<V> q = x.head(n_), qd = x.tail(n_);
   // W = A^-1 at the current q.
   M W;
   if (model_) {
@@ -185,13 +208,14 @@ double Plant::position_residual(const ConstraintSpec& c, const Eigen::Ref<const 
   return x * x + y * y - L * L * (1 - c.mu * std::sin(x * x));
 }
 
-double Plant::constraint_residual(const V& q, const V& qd) const {
+double Plant::constraint_residual(const V& q, const V& qd, double t) {
+  if (!has_constraints()) return 0.0;
+  gather_rows(q, qd, t);
   double worst = 0;
-  for (const ConstraintSpec& c : constraints_) {
-    const auto& k = c.coordinates;
-    const double r = c.kind == ConstraintKind::kPendulumLength ? position_residual(c, q)
-                                                               : qd(k[1]) - q(k[2]) * qd(k[0]);
-    if (std::abs(r) > std::abs(worst)) worst = r;
+  for (int k = 0; k < constraint_rows(); ++k) {
+    const double r =
+        rows_.holonomic[static_cast<std::size_t>(k)] != 0 ? rows_.e(k) : rows_.e_rate(k);
+    if (std::abs(r) > std::abs(worst) || !std::isfinite(r)) worst = r;
   }
   return worst;
 }
@@ -200,9 +224,26 @@ Control::Control(const Scene& s, const RunOptions& o) {
   if (!s.tracking.enabled) return;
   const ModelFactory& model = find_model(o, s.tracking.model, s.tracking.where);
   if (model.dof != s.dof())
-    throw SceneError(s.tracking.where + ": model '" + s.tracking.model + "' has " + std::to_string(model.dof) +
-                     " coordinates, the plant has " + std::to_string(s.dof()));
-  if (o.sampled_control) error_ = model.tracking_error(s.tracking);
+    throw SceneError(s.tracking.where + ": model '" + s.tracking.model + "' has " +
+                     std::to_string(model.dof) + " coordinates, the plant has " +
+                     std::to_string(s.dof()));
+  // The law leaves the model's physical rows to the plant: a plant that does not hold them would
+  // let the machine move where the law assumes it cannot (a wheel slipping sideways).
+  if (model.physical_rows > 0) {
+    const ModelFactory* plant =
+        s.plant_model.empty() ? nullptr : &find_model(o, s.plant_model, s.plant_model_where);
+    if (plant == nullptr || plant->physical_rows != model.physical_rows)
+      throw SceneError(s.tracking.where + ": model '" + s.tracking.model + "' declares " +
+                       std::to_string(model.physical_rows) +
+                       " physical row(s), which the plant must hold: the plant's model "
+                       "(plant.model) must declare "
+                       "the same rows" +
+                       (s.plant_model.empty() ? std::string(" (this plant has no model)")
+                                              : " ('" + s.plant_model + "' declares " +
+                                                    std::to_string(plant->physical_rows) + ")"));
+  }
+  if (o.sampled_control)
+    error_ = model.tracking_error(s.tracking);
   else {
     // A sampled controller holds its force over the scene's control period.
     TrackingSpec spec = s.tracking;

@@ -33,7 +33,9 @@ class Plant {
   Plant(const Scene& s, const RunOptions& o);
 
   int dof() const { return n_; }
-  bool has_constraints() const { return !constraints_.empty(); }
+  /// Rows the plant holds: the scene's listed constraints, then its model's physical rows.
+  int constraint_rows() const { return static_cast<int>(constraints_.size()) + model_rows_; }
+  bool has_constraints() const { return constraint_rows() > 0; }
 
   /// Generalized impressed force Q(q, q', t) from the force effects listed, and nothing else.
   /// Every output is written into a vector the caller keeps: no allocation per evaluation,
@@ -47,13 +49,17 @@ class Plant {
   void acceleration(const V& q, const V& qd, double t, const V& u, RunSummary& stats, V& qdd);
   /// Projects a state x = (q, q') onto the constraint manifolds, by the least change in the
   /// metric of A (the mass-weighted projection): positions onto phi = 0 for the holonomic
-  /// constraints (Gauss-Newton, at most 3 steps), then velocities onto D q' = 0 for all of them
-  /// (each constraint here has phi_t = 0 and psi = D q'). Returns false if the state is not finite.
+  /// rows (Gauss-Newton, at most 3 steps), then velocities onto phi' = 0 and psi = 0 for all of
+  /// them (both affine in q'). Returns false if the state is not finite.
   bool project(V& x, double t, RunSummary& stats);
-  /// The physical constraint residual of largest magnitude (0 without constraints).
-  double constraint_residual(const V& q, const V& qd) const;
+  /// The physical constraint residual of largest magnitude (0 without constraints): phi for a
+  /// position-level row, psi for a velocity-level one.
+  double constraint_residual(const V& q, const V& qd, double t);
 
  private:
+  // Every row the plant holds at (q, q', t), into rows_: D q'' = g, position error e (phi; 0 for
+  // a velocity-level row), velocity error e' (phi' or psi), and which rows are holonomic.
+  void gather_rows(const V& q, const V& qd, double t);
   // Constraint k's row: D_k q'' = g_k, with D_k = grad phi_k (or the Pfaffian row) and g_k the
   // rest of phi_k'' (or psi_k') moved to the right.
   void constraint_row(const ConstraintSpec& c, const Eigen::Ref<const V>& q, const Eigen::Ref<const V>& qd,
@@ -68,6 +74,12 @@ class Plant {
   std::vector<EffectSpec> forces_;
   std::optional<EffectSpec> saturation_, noise_;
   std::vector<ConstraintSpec> constraints_;
+  int model_rows_ = 0;  // the model's physical rows
+  struct Rows {
+    M D;
+    V g, e, e_rate;
+    std::vector<char> holonomic;
+  } rows_;
   std::mt19937_64 rng_;
   Eigen::LLT<M> llt_;
   M kkt_;

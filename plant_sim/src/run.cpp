@@ -220,7 +220,7 @@ void Run::record(const State& x, double t) {
   smp.qd.assign(qd.data(), qd.data() + n_);
   smp.u.assign(u.data(), u.data() + n_);
   smp.tracking_error = control_.tracking_error(q, qd, t);
-  smp.constraint_residual = plant_.constraint_residual(q, qd);
+  smp.constraint_residual = plant_.constraint_residual(q, qd, t);
   stats_.max_tracking_error = std::max(stats_.max_tracking_error, std::abs(smp.tracking_error));
   stats_.max_constraint_residual = std::max(stats_.max_constraint_residual, std::abs(smp.constraint_residual));
   result_.samples.push_back(std::move(smp));

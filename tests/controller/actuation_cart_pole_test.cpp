@@ -13,6 +13,7 @@
 #include "actuation_systems.hpp"
 #include "allocation_counter.hpp"
 #include "gausstrack/systems/cart_pole.hpp"
+#include "gausstrack/systems/differential_drive.hpp"
 #include "oracles.hpp"
 
 namespace gausstrack::test {
@@ -120,6 +121,22 @@ TEST(Actuation, AllocationFree) {
   });
   Eigen::internal::set_is_malloc_allowed(true);
   EXPECT_EQ(n, 0);
+}
+
+// With physical rows too (the differential drive: one SVD of the rows the ground holds).
+TEST(Actuation, AllocationFreeAmongPhysicalRows) {
+  ControllerOptions<double> o;
+  o.stabilization = {1.0, 4.0};
+  ActuatedController<systems::DifferentialDrive<double>> c(systems::DifferentialDrive<double>{}, o);
+  ActuatedController<systems::DifferentialDrive<double>>::Output out;
+  const Eigen::Vector3d q(0.1, -0.2, 0.3), qd(0.4, 0.1, 0.2);
+  Eigen::internal::set_is_malloc_allowed(false);
+  const long n = support::allocations_during([&] {
+    for (int i = 0; i < 10; ++i) c.compute(q, qd, 0.01 * i, out);
+  });
+  Eigen::internal::set_is_malloc_allowed(true);
+  EXPECT_EQ(n, 0);
+  EXPECT_EQ(out.diagnostics.status, Status::kOk);
 }
 
 }  // namespace

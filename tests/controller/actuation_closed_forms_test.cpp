@@ -68,6 +68,29 @@ TEST(Actuation, AnUnactuatedRowIsNamedAndRedundantActuatorsShareByTheWeight) {
 
 // Columns of B that are dependent (the second three times the first) make Gauss's weight
 // singular: refused, not answered with a command of 1 / eps along B's null space.
+// The actuated law keeps the same history of its reach as the solver: one row D = s (0.8, 0.6)
+// through two actuators, shrinking from s = 1, is flagged once s < sqrt(eps), and its commands,
+// still computed, grow like 1 / s.
+TEST(Actuation, AVanishingReachIsFlaggedAgainstTheLawsHistory) {
+  using S = GivenSystem<2, 1, 2>;
+  S sys;
+  sys.A = Eigen::Vector2d(2.0, 0.5).asDiagonal();
+  sys.Q << 0.0, -9.81;
+  sys.g << 0.3;
+  sys.B << 1.0, 0.2, -0.3, 1.0;
+  ActuatedController<S> c(sys);
+  double previous = 0;
+  for (double s = 1.0; s >= 1e-12; s /= 10) {
+    c.model().D = s * Eigen::RowVector2d(0.8, 0.6);
+    ActuatedController<S>::Output out;
+    ASSERT_EQ(c.compute(Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), 0.0, out), Status::kOk)
+        << s;
+    EXPECT_EQ(out.diagnostics.has(warning::kVanishingReach), s < 1.49e-8) << s;
+    EXPECT_GT(out.control.norm(), previous) << s;
+    previous = out.control.norm();
+  }
+}
+
 TEST(Actuation, DependentActuatorsAreRefusedUnderGausssWeight) {
   RandomSource<double> rng(19);
   GivenSystem<3, 1, 2> sys = GivenSystem<3, 1, 2>::random(rng);

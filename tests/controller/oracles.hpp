@@ -27,6 +27,16 @@ VectorXd compact_form_force(const MatrixXd& A, const VectorXd& f, const VectorXd
 std::pair<VectorXd, VectorXd> kkt_solution(const MatrixXd& A, const VectorXd& f, const VectorXd& Q,
                                            const MatrixXd& D, const VectorXd& g);
 
+/// The least u^T W u whose force B u, applied to the system that the environment holds on
+/// D_p q'' = g_p, meets the task rows D_c q'' = r_c: one equality-constrained quadratic program in
+/// (u, q'', mu_p), solved by its Lagrange-multiplier system with full-pivoting LU. Returns (u,
+/// q''). Needs D_p of full row rank and a task the actuators can meet.
+std::pair<VectorXd, VectorXd> physical_least_cost_control(const MatrixXd& A, const VectorXd& f,
+                                                          const VectorXd& Q, const MatrixXd& Dp,
+                                                          const VectorXd& gp, const MatrixXd& Dc,
+                                                          const VectorXd& rc, const MatrixXd& B,
+                                                          const MatrixXd& W);
+
 /// Eq. (14): (A q'' + f - Q)^T A^-1 (A q'' + f - Q).
 double gauss_function(const MatrixXd& A, const VectorXd& f, const VectorXd& Q, const VectorXd& qdd);
 

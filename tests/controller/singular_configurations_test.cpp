@@ -52,6 +52,9 @@ TEST(SingularConfigurations, VanishingGradientIsFlaggedAndItsForceBounded) {
     // The relative tolerance sees nothing: full rank, no warning about rank, a growing force.
     EXPECT_EQ(a.diagnostics.rank, 1) << eps;
     EXPECT_FALSE(a.diagnostics.has(warning::kRankDeficient)) << eps;
+    // Out of the box the reach (|q| here) is judged against the largest the controller has seen
+    // (1, at the first call): below sqrt(eps) of it the call says the reach is vanishing.
+    EXPECT_EQ(a.diagnostics.has(warning::kVanishingReach), eps < 1.49e-8) << eps;
     EXPECT_GT(a.force.norm(), previous) << eps;
     previous = a.force.norm();
     // The floor flags it once |q| (the singular value) is below it, and bounds the force.
@@ -62,6 +65,35 @@ TEST(SingularConfigurations, VanishingGradientIsFlaggedAndItsForceBounded) {
     }
   }
   EXPECT_GT(previous, 1e8);  // unbounded without the floor
+}
+
+// The solver alone keeps the same history: a one-row constraint D = s (0.8, 0.6) shrinking from
+// s = 1 is flagged from s < sqrt(eps) on, with the force still computed (it grows like 1 / s). A
+// fresh solver has no history: its first call, even at s = 1e-15, is not flagged (the floor in the
+// model's units covers that case), and set_options starts the history again.
+TEST(SingularConfigurations, TheSolverFlagsAReachVanishingAgainstItsHistory) {
+  ConstraintSolver<2, 1> solver;
+  ConstraintSolver<2, 1>::Solution out;
+  const Eigen::Matrix2d A = Eigen::Vector2d(2.0, 0.5).asDiagonal();
+  const Eigen::Vector2d f(0.1, -0.2), Q(0.0, -9.81);
+  const Eigen::Matrix<double, 1, 1> g(0.3);
+  for (double s = 1.0; s >= 1e-15; s /= 10) {
+    const Eigen::Matrix<double, 1, 2> D = s * Eigen::RowVector2d(0.8, 0.6);
+    ASSERT_EQ(solver.solve(A, f, Q, D, g, out), Status::kOk) << s;
+    const double reach = (D * A.inverse() * D.transpose()).cwiseSqrt()(0, 0);  // |D A^(-1/2)|
+    const double first = std::sqrt(0.8 * 0.8 / 2.0 + 0.6 * 0.6 / 0.5);
+    EXPECT_EQ(out.diagnostics.has(warning::kVanishingReach),
+              reach < std::sqrt(2.220446049250313e-16) * first)
+        << s;
+    EXPECT_FALSE(out.diagnostics.has(warning::kRankDeficient)) << s;
+  }
+  ConstraintSolver<2, 1> fresh;
+  ASSERT_EQ(fresh.solve(A, f, Q, Eigen::RowVector2d(0.8e-15, 0.6e-15), g, out), Status::kOk);
+  EXPECT_FALSE(out.diagnostics.has(warning::kVanishingReach));
+  EXPECT_GT(out.constraint_force.norm(), 1e13);
+  solver.set_options(solver.options());
+  ASSERT_EQ(solver.solve(A, f, Q, Eigen::RowVector2d(0.8e-15, 0.6e-15), g, out), Status::kOk);
+  EXPECT_FALSE(out.diagnostics.has(warning::kVanishingReach));
 }
 
 // The arm stretched (q2 = q3 = 0): the hand's Jacobian loses a direction. Approaching it, the

@@ -48,7 +48,10 @@ void expect_identical(const ConstraintSolution<N, P>& a, const ConstraintSolutio
   EXPECT_EQ(a.force_from_impressed, b.force_from_impressed);
   EXPECT_EQ(a.force_from_rhs, b.force_from_rhs);
   EXPECT_EQ(a.diagnostics.status, b.diagnostics.status);
-  EXPECT_EQ(a.diagnostics.warnings, b.diagnostics.warnings);
+  // kVanishingReach compares with the solver's history by design (a kept solver that saw larger
+  // rows flags a vanishing one; a fresh solver cannot): every other flag is the same.
+  constexpr std::uint32_t kHistory = warning::kVanishingReach;
+  EXPECT_EQ(a.diagnostics.warnings & ~kHistory, b.diagnostics.warnings & ~kHistory);
   EXPECT_EQ(a.diagnostics.rank, b.diagnostics.rank);
   EXPECT_EQ(a.diagnostics.strategy_used, b.diagnostics.strategy_used);
   EXPECT_EQ(a.diagnostics.condition_estimate, b.diagnostics.condition_estimate);

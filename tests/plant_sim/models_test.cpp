@@ -67,6 +67,60 @@ TEST(Models, CartPoleSwingsItsPendulumWithTheCartForceAlone) {
       << "held " << held.summary.max_tracking_error << ", at the measured state " << plain.summary.max_tracking_error;
 }
 
+// The differential drive: drive force and yaw torque only, the ground holding its wheels against
+// side slip (the model's physical row, held by the plant's KKT solve). The look-ahead point
+// converges onto the figure-eight, the wheels never slip, and no command ever pushes sideways.
+TEST(Models, DifferentialDriveTracksTheFigureEightWithoutSlipping) {
+  const RunResult r = run_scene(load_scene(kScenes + "/differential_drive.yaml"));
+  ASSERT_TRUE(r.summary.failure.empty()) << r.summary.failure;
+  EXPECT_EQ(r.summary.control_failures, 0u);
+  EXPECT_EQ(r.summary.warnings.rows_not_met, 0u);
+  EXPECT_GT(r.samples.front().tracking_error * r.samples.front().tracking_error,
+            1e-3);  // starts off the path
+  EXPECT_LT(r.summary.max_constraint_residual, 1e-9);
+  double settled = 0, largest = 0;
+  for (const Sample& s : r.samples) {
+    const double sideways = -std::sin(s.q[2]) * s.u[0] + std::cos(s.q[2]) * s.u[1];
+    ASSERT_LE(std::abs(sideways), 1e-12 * (1 + std::abs(s.u[0]) + std::abs(s.u[1])))
+        << "t = " << s.t;
+    largest = std::max(largest, std::abs(s.u[0]) + std::abs(s.u[1]));
+    if (s.t >= 10) settled = std::max(settled, std::abs(s.tracking_error));
+  }
+  EXPECT_GT(largest, 1.0);
+  EXPECT_LT(settled, 1e-8);
+}
+
+// Without a law the plant alone holds the no-slip row: pushed off along its heading and turning,
+// the robot's velocity follows its heading (a plant that ignored the row would keep its first
+// direction of travel).
+TEST(Models, ThePlantHoldsAModelsPhysicalRowsOnItsOwn) {
+  const RunResult r = run_scene(
+      load_scene(kScenes + "/differential_drive.yaml",
+                 {"tracking=null", "plant.initial={q1: 0, q2: 0, q3: 0, qd1: 1, qd2: 0, qd3: 0.5}",
+                  "duration=4"}));
+  ASSERT_TRUE(r.summary.failure.empty()) << r.summary.failure;
+  const Sample& last = r.samples.back();
+  EXPECT_GT(std::abs(last.q[2]), 0.5);  // it turned
+  const double speed = std::hypot(last.qd[0], last.qd[1]);
+  ASSERT_GT(speed, 0.1);
+  EXPECT_NEAR(last.qd[0] / speed, std::cos(last.q[2]), 1e-9);
+  EXPECT_NEAR(last.qd[1] / speed, std::sin(last.q[2]), 1e-9);
+  EXPECT_LT(r.summary.max_constraint_residual, 1e-9);
+}
+
+// A law that leaves rows to the environment needs a plant that holds them.
+TEST(Models, APlantThatCannotHoldTheModelsPhysicalRowsIsRefused) {
+  try {
+    run_scene(load_scene(kScenes + "/differential_drive.yaml",
+                         {"plant.model=null", "plant.masses=[10, 10, 0.5]"}));
+    FAIL() << "a plant without the no-slip row was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("declares 1 physical row(s), which the plant must hold"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Models, PointMassChainEqualsTheChainModelAsItsOwnPlant) {
   const std::string scene = kScenes + "/duffing_chain8.yaml";
   const RunResult point_masses = run_scene(load_scene(scene));

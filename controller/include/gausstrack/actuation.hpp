@@ -1,4 +1,5 @@
-// The tracking law for a machine that pushes only through its actuators.
+// The tracking law for a machine that pushes only through its actuators, among constraints the
+// environment holds.
 //
 // A model that declares an actuation matrix B(q, t) (N x K: the generalized force of actuator
 // commands u in R^K is B u),
@@ -11,22 +12,37 @@
 // family; any square root of W gives the same u). The default weight is Gauss's,
 // W = B^T A^-1 B: the answer then is the one of least acceleration change in A's metric among the
 // forces B can give, and with B = I it is eq. (32)'s force (actuation_test holds the two equal).
-// When D A^-1 B has rank below P, some rows cannot be actuated: u meets the rows in the
-// least-squares sense, warning::kRankDeficient is set, and `unmet_rows` says which rows are not
-// met. The force B u is in the range of B by construction. As in TrackingController, u is split
-// into a closed-loop part (from -D a), a feedforward part (from the model's g) and a stabilizing
-// part (from Baumgarte's correction), each mapped through the same pseudo-inverse.
+// A model without B is controlled through B = I (K = N).
 //
-// How it is computed, with A = L L^T (Cholesky) and C = D L^-T (so that D A^-1 B = C L^-1 B):
+// Physical rows (model.hpp, kPhysicalRowMask: D_p q'' = g_p, held by the environment) make the
+// system the law controls the physically constrained one: its acceleration and its response to a
+// force are, by Gauss's principle applied to the physical rows alone (eq. 30 with D_p),
+//   a_p = a + A^(-1/2) (D_p A^(-1/2))^+ (g_p - D_p a),
+//   M_p = A^(-1/2) (I - (D_p A^(-1/2))^+ D_p A^(-1/2)) A^(-1/2),
+// and the task rows D_c become D_c M_p B u = g_c - D_c a_p. The control then never pushes along
+// the physical rows: with B = I and Gauss's weight, D_p A^-1 u = 0. Physical rows are neither
+// stabilized nor counted as the task; their residual under the law's acceleration is reported.
+//
+// When D_c M_p B has rank below its task rows, some rows cannot be actuated: u meets the rows in
+// the least-squares sense, warning::kRankDeficient is set, and `unmet_rows` says which rows are
+// not met. The force B u is in the range of B by construction. As in TrackingController, u is
+// split into a closed-loop part (from -D_c a_p), a feedforward part (from the model's g_c) and a
+// stabilizing part (from Baumgarte's correction), each mapped through the same pseudo-inverse.
+//
+// How it is computed, with A = L L^T (Cholesky) and C = D L^-T (so that D A^-1 B = C L^-1 B;
+// any square root of A serves in M_p):
+// - Physical rows: the thin SVD C_p^T = U_p S_p V_p^T gives C_p^+ = U_p S_p^+ V_p^T and the
+//   projector I - U_p U_p^T (columns of U_p whose singular value is above the rank tolerance).
 // - Gauss's weight: L^-1 B = U R (Gram-Schmidt, twice per column) gives W = R^T R, so the scaled
-//   task matrix is C U (orthonormal actuated directions) and u = R^-1 (C U)^+ r. Dependent
-//   columns of B (a diagonal of R at or below K eps times the largest column) make W singular:
+//   task matrix is C_c (I - U_p U_p^T) U and u = R^-1 (...)^+ r. Dependent columns of B (a
+//   diagonal of R at or below sqrt(eps) times the largest column) make W singular:
 //   Status::kWeightNotPositiveDefinite.
-// - A given weight W = Lw Lw^T (set_weight): u = Lw^-T (C L^-1 B Lw^-T)^+ r.
-// The pseudo-inverse is the one-sided Jacobi SVD of rank_revealing.hpp with the solver options'
-// rank tolerance and singular-value floor (SolverOptions::min_singular_value: with Gauss's weight
-// the singular values are those of D A^(-1/2) restricted to the actuated directions, in the same
-// units). Fixed-size storage: allocation-free and exception-free after construction.
+// - A given weight W = Lw Lw^T (set_weight): U is replaced by L^-1 B Lw^-T and R^-1 by Lw^-T.
+// The task's pseudo-inverse is the one-sided Jacobi SVD of rank_revealing.hpp with the solver
+// options' rank tolerance and singular-value floor (SolverOptions::min_singular_value: with
+// Gauss's weight the singular values are those of D_c A^(-1/2) restricted to the actuated,
+// physically free directions, in the same units). Fixed-size storage: allocation-free and
+// exception-free after construction.
 #pragma once
 
 #include <Eigen/Core>
@@ -51,6 +67,29 @@ concept ActuatedModel =
       requires M::kActuators >= 1;
       { m.actuation(q, t, b) } noexcept;
     };
+
+namespace detail {
+template <typename M>
+constexpr int actuator_count() {
+  if constexpr (ActuatedModel<M>)
+    return M::kActuators;
+  else
+    return M::kDof;
+}
+// Indices of the rows with (Physical) or without the physical bit, in order.
+template <typename M, bool Physical, int Count>
+constexpr std::array<int, static_cast<std::size_t>(Count)> rows_of_kind() {
+  std::array<int, static_cast<std::size_t>(Count)> rows{};
+  std::size_t k = 0;
+  for (int i = 0; i < M::kConstraints; ++i)
+    if (RowLayout<M>::physical(i) == Physical) rows[k++] = i;
+  return rows;
+}
+}  // namespace detail
+
+/// K: the model's actuators, or N for a model without B (every coordinate actuated, B = I).
+template <typename M>
+inline constexpr int kActuatorsOf = detail::actuator_count<M>();
 
 /// The actuator commands for one measured state, and the generalized force they give.
 template <int N, int P, int K, typename Scalar>
@@ -78,17 +117,20 @@ struct ActuatedOutput {
   SolveDiagnostics<Scalar> diagnostics;
 };
 
-/// The actuated law for an ActuatedModel: one evaluation of the model's terms and of B, Baumgarte's
-/// correction per row, an orthonormal basis of B's scaled directions (Gauss's weight) and one SVD
-/// of the scaled task matrix. The solver options' strategy is not used (the task matrix is always factored by
-/// the SVD); its tolerances are.
-template <ActuatedModel M>
+/// The actuated law for a model with actuators or physical rows (or any model, through B = I): one
+/// evaluation of the model's terms and of B, Baumgarte's correction per task row, one SVD of the
+/// physical rows (when there are any), an orthonormal basis of B's scaled directions (Gauss's
+/// weight) and one SVD of the scaled task matrix. The solver options' strategy is not used (the
+/// task matrix is always factored by the SVD); its tolerances are.
+template <Model M>
 class ActuatedController {
  public:
   using Scalar = typename M::Scalar;
   static constexpr int N = M::kDof;
   static constexpr int P = M::kConstraints;
-  static constexpr int K = M::kActuators;
+  static constexpr int K = kActuatorsOf<M>;
+  static constexpr int kPhysical = RowLayout<M>::kPhysical;  ///< P_p, rows the environment holds
+  static constexpr int kTask = RowLayout<M>::kTask;          ///< P_c, rows the control holds
   using VectorN = Eigen::Matrix<Scalar, N, 1>;
   using VectorP = Eigen::Matrix<Scalar, P, 1>;
   using VectorK = Eigen::Matrix<Scalar, K, 1>;
@@ -111,10 +153,11 @@ class ActuatedController {
   /// B at the last computed state.
   const MatrixNK& actuation() const noexcept { return b_; }
 
-  /// Baumgarte gains of one task row, as TrackingController::set_stabilization.
+  /// Baumgarte gains of one task row, as TrackingController::set_stabilization (false for a
+  /// physical row: the law does not act on it).
   bool set_stabilization(int row, const Stabilization<Scalar>& gains) noexcept {
-    if (row < 0 || row >= P || !std::isfinite(gains.zeta) || !(gains.zeta >= Scalar(0)) ||
-        !std::isfinite(gains.omega) || !(gains.omega >= Scalar(0)))
+    if (row < 0 || row >= P || RowLayout<M>::physical(row) || !std::isfinite(gains.zeta) ||
+        !(gains.zeta >= Scalar(0)) || !std::isfinite(gains.omega) || !(gains.omega >= Scalar(0)))
       return false;
     row_gains_[static_cast<std::size_t>(row)] = gains;
     return true;
@@ -190,7 +233,10 @@ class ActuatedController {
   Status evaluate(const VectorN& qv, const VectorN& qdv, Scalar t, Output& out) noexcept {
     out = Output{};
     evaluate_model(model_, qv, qdv, t, terms_);
-    model_.actuation(qv, t, b_);
+    if constexpr (ActuatedModel<M>)
+      model_.actuation(qv, t, b_);
+    else
+      b_.setIdentity();
     out.constraint_error = terms_.constraint_error;
     out.constraint_error_rate = terms_.constraint_error_rate;
     std::uint32_t bad = 0;
@@ -206,6 +252,7 @@ class ActuatedController {
 
     VectorP correction = VectorP::Zero();
     for (int i = 0; i < P; ++i) {
+      if (RowLayout<M>::physical(i)) continue;
       const Stabilization<Scalar>& s = row_gains_[static_cast<std::size_t>(i)];
       if (s.enabled())
         correction(i) = -(Scalar(2) * s.zeta * s.omega) * terms_.constraint_error_rate(i) -
@@ -222,12 +269,43 @@ class ActuatedController {
     small_dense::solve_lower_in_place(l_, lb);
     Eigen::Matrix<Scalar, N, P> ct = terms_.constraint_matrix.transpose();
     small_dense::solve_lower_in_place(l_, ct);
+    const Scalar eps = std::numeric_limits<Scalar>::epsilon();
+
+    // The task rows' C_c^T, and with physical rows: a_p, and C_c^T projected onto the directions
+    // the physical rows leave free (the projector is symmetric, so C_c P_n = (P_n C_c^T)^T).
+    Eigen::Matrix<Scalar, N, kTask> ctc;
+    for (int j = 0; j < kTask; ++j) ctc.col(j) = ct.col(kTaskRows[static_cast<std::size_t>(j)]);
+    if constexpr (kPhysical > 0) {
+      Eigen::Matrix<Scalar, N, kPhysical> up;  // C_p^T, then U_p
+      Eigen::Matrix<Scalar, kPhysical, 1> sp, rp;
+      Eigen::Matrix<Scalar, kPhysical, kPhysical> vp;
+      for (int j = 0; j < kPhysical; ++j) {
+        const int row = kPhysicalRows[static_cast<std::size_t>(j)];
+        up.col(j) = ct.col(row);
+        rp(j) = terms_.constraint_rhs(row) - terms_.constraint_matrix.row(row).dot(a);
+      }
+      if (!small_dense::jacobi_svd_in_place(up.data(), N, kPhysical, sp.data(), vp.data()))
+        return fail(out, Status::kNonFiniteResult, 0);
+      const Scalar tol =
+          (options_.solver.rank_tolerance > Scalar(0) ? options_.solver.rank_tolerance
+                                                      : Scalar(N) * eps) *
+          sp(0);
+      free_basis_rank_ = 0;
+      for (int j = 0; j < kPhysical; ++j)
+        if (sp(j) > tol) ++free_basis_rank_;
+      // a_p = a + L^-T C_p^+ (g_p - D_p a), C_p^+ = U_p S_p^+ V_p^T.
+      VectorN shift = VectorN::Zero();
+      for (int j = 0; j < free_basis_rank_; ++j) shift += up.col(j) * (vp.col(j).dot(rp) / sp(j));
+      small_dense::solve_lower_transposed_in_place(l_, shift);
+      a += shift;
+      physical_basis_ = up;
+      project_free(ctc);
+    }
 
     // The actuated directions G (N x K) with D A^-1 B W^(-1/2) = C G, and back = the map from the
     // pseudo-inverse's answer to u.
     MatrixNK g_dirs;
     MatrixKK back;
-    const Scalar eps = std::numeric_limits<Scalar>::epsilon();
     if (gauss_weight_) {
       if constexpr (K > N) {
         return fail(out, Status::kWeightNotPositiveDefinite, 0);  // more actuators than coordinates
@@ -266,14 +344,16 @@ class ActuatedController {
       back = MatrixKK::Identity();
       small_dense::solve_lower_transposed_in_place(weight_factor_, back);  // Lw^-T
     }
-    const Eigen::Matrix<Scalar, P, K> task = ct.transpose() * g_dirs;
+    const Eigen::Matrix<Scalar, kTask, K> task = ctc.transpose() * g_dirs;
 
     // Thin SVD of the task matrix (or of its transpose, so that rows >= columns).
-    constexpr int kRows = K >= P ? K : P;
-    constexpr int kCols = K >= P ? P : K;
+    constexpr int kRows = K >= kTask ? K : kTask;
+    constexpr int kCols = K >= kTask ? kTask : K;
     Eigen::Matrix<Scalar, kRows, kCols> w;
-    if constexpr (K >= P) w = task.transpose();
-    else w = task;
+    if constexpr (K >= kTask)
+      w = task.transpose();
+    else
+      w = task;
     Eigen::Matrix<Scalar, kCols, 1> sigma;
     Eigen::Matrix<Scalar, kCols, kCols> v;
     if (!small_dense::jacobi_svd_in_place(w.data(), kRows, kCols, sigma.data(), v.data()))
@@ -282,7 +362,7 @@ class ActuatedController {
     // directions: they are measured against D A^(-1/2) itself (its Frobenius norm), so that
     // actuators that barely reach the rows (one row, one actuator, its reach vanishing) show as
     // ill-conditioned instead of a condition of 1.
-    const Scalar reach = gauss_weight_ ? std::max(sigma(0), ct.norm()) : sigma(0);
+    const Scalar reach = gauss_weight_ ? std::max(sigma(0), ctc.norm()) : sigma(0);
     const Scalar relative =
         (options_.solver.rank_tolerance > Scalar(0) ? options_.solver.rank_tolerance : Scalar(kRows) * eps) * reach;
     const Scalar floor = std::max(relative, options_.solver.min_singular_value);
@@ -297,14 +377,18 @@ class ActuatedController {
         near_singular = true;
       }
     }
-    // v = task^+ r for each part of r, then u = back v.
-    auto control_for = [&](const VectorP& r) -> VectorK {
+    // v = task^+ r for each part of r (its task rows), then u = back v.
+    auto control_for = [&](const VectorP& all) -> VectorK {
+      Eigen::Matrix<Scalar, kTask, 1> r;
+      for (int j = 0; j < kTask; ++j) r(j) = all(kTaskRows[static_cast<std::size_t>(j)]);
       VectorK x;
-      if constexpr (K >= P) x = w * (inverse.asDiagonal() * (v.transpose() * r));  // task^T = w S v^T
-      else x = v * (inverse.asDiagonal() * (w.transpose() * r));                      // task = w S v^T
+      if constexpr (K >= kTask)
+        x = w * (inverse.asDiagonal() * (v.transpose() * r));  // task^T = w S v^T
+      else
+        x = v * (inverse.asDiagonal() * (w.transpose() * r));  // task = w S v^T
       return back * x;
     };
-    out.control_closed_loop = control_for(-(terms_.constraint_matrix * a));
+    out.control_closed_loop = control_for(-(terms_.constraint_matrix * a));  // a is a_p here
     out.control_feedforward = control_for(terms_.constraint_rhs);
     out.control_stabilizing = control_for(correction);
     out.control = out.control_closed_loop + out.control_feedforward + out.control_stabilizing;
@@ -315,9 +399,13 @@ class ActuatedController {
     d.sigma_max = sigma(0);
     d.sigma_min_kept = rank > 0 ? sigma(rank - 1) : Scalar(0);
     d.condition_estimate = rank > 0 ? reach / sigma(rank - 1) : Scalar(0);
-    if (rank < P) d.warnings |= warning::kRankDeficient;
+    if (rank < kTask) d.warnings |= warning::kRankDeficient;
     if (near_singular) d.warnings |= warning::kNearSingular;
-    if (d.condition_estimate > options_.solver.warn_condition) d.warnings |= warning::kIllConditioned;
+    if (d.condition_estimate > options_.solver.warn_condition)
+      d.warnings |= warning::kIllConditioned;
+    d.sigma_max = reach;  // the rows' reach, for the history of kVanishingReach
+    reach_seen_ = flag_vanishing_reach(options_.solver.vanishing_ratio, reach_seen_, d);
+    d.sigma_max = sigma(0);
 
     // Actuator limits: u and its parts scaled as a whole.
     for (int i = 0; i < K; ++i) {
@@ -337,8 +425,9 @@ class ActuatedController {
     out.closed_loop = b_ * out.control_closed_loop;
     out.feedforward = b_ * out.control_feedforward;
     out.stabilizing = b_ * out.control_stabilizing;
-    // q'' = a + A^-1 B u = a + L^-T (L^-1 B) u.
+    // q'' = a_p + M_p B u = a_p + L^-T P_n (L^-1 B) u.
     VectorN pushed = lb * out.control;
+    if constexpr (kPhysical > 0) project_free(pushed);
     small_dense::solve_lower_transposed_in_place(l_, pushed);
     out.acceleration = a + pushed;
     if (!out.force.allFinite() || !out.acceleration.allFinite()) return fail(out, Status::kNonFiniteResult, 0);
@@ -356,6 +445,14 @@ class ActuatedController {
     d.residual_norm = out.row_residual.norm();
     if (out.unmet_rows != 0) d.warnings |= warning::kConstraintsNotMet;
     return d.status;
+  }
+
+  // x -= U_p (U_p^T x): onto the directions the physical rows leave free.
+  template <int Cols>
+  void project_free(Eigen::Matrix<Scalar, N, Cols>& x) const noexcept {
+    for (int c = 0; c < Cols; ++c)
+      for (int j = 0; j < free_basis_rank_; ++j)
+        x.col(c) -= physical_basis_.col(j) * physical_basis_.col(j).dot(x.col(c));
   }
 
   static Status fail(Output& out, Status status, std::uint32_t inputs) noexcept {
@@ -387,18 +484,26 @@ class ActuatedController {
   MatrixNK b_ = MatrixNK::Zero();
   Eigen::Matrix<Scalar, N, N> l_;
   HoldPrediction<N, Scalar> prediction_;  ///< the hold's memory
+  static constexpr std::array<int, static_cast<std::size_t>(kTask)> kTaskRows =
+      detail::rows_of_kind<M, false, kTask>();
+  static constexpr std::array<int, static_cast<std::size_t>(kPhysical)> kPhysicalRows =
+      detail::rows_of_kind<M, true, kPhysical>();
+  // U_p's leading free_basis_rank_ columns span the directions the physical rows constrain.
+  Eigen::Matrix<Scalar, N, (kPhysical > 0 ? kPhysical : 1)> physical_basis_;
+  int free_basis_rank_ = 0;
+  Scalar reach_seen_ = Scalar(0);  ///< the largest reach computed (kVanishingReach)
 };
 
-/// The controller for model M: ActuatedController when M declares actuators, else
-/// TrackingController (every coordinate actuated). Both compute(q, qd, t, out) into an output
-/// with force, closed_loop, feedforward, stabilizing, saturation_scale and diagnostics, and take
-/// set_stabilization and set_hold.
+/// The controller for model M: ActuatedController when M declares actuators or physical rows, else
+/// TrackingController (every coordinate actuated, every row a task). Both compute(q, qd, t, out)
+/// into an output with force, closed_loop, feedforward, stabilizing, saturation_scale and
+/// diagnostics, and take set_stabilization and set_hold.
 template <Model M>
 struct LawForModel {
   using type = TrackingController<M>;
 };
-template <ActuatedModel M>
-struct LawForModel<M> {
+template <Model M>
+requires(ActuatedModel<M> || RowLayout<M>::kPhysical > 0) struct LawForModel<M> {
   using type = ActuatedController<M>;
 };
 template <Model M>

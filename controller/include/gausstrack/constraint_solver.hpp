@@ -108,6 +108,13 @@ struct SolverOptions {
   /// the rows is not enforced, which bounds the force by ||L|| ||g - D a|| / min_singular_value.
   /// 0 (the default) relies on the relative rank tolerance alone.
   Scalar min_singular_value = Scalar(0);
+  /// warning::kVanishingReach when the largest singular value of D A^(-1/2) falls below this
+  /// times the largest one the solver has computed since it was made or its options were set: the
+  /// model's own scale, as the run has shown it. sqrt(eps) by default (the same margin as
+  /// warn_condition, measured against the run's history instead of the current call); 0 turns it
+  /// off. A solver whose first call is already at the vanishing point has no scale to compare
+  /// with: min_singular_value, in the model's units, covers that.
+  Scalar vanishing_ratio = std::sqrt(kEps);
   /// Keep the factorization while A and D are unchanged bit for bit (see the file comment). Only
   /// the cost changes: false factors on every call, as a configuration-dependent A and D do.
   bool reuse_factorization = true;
@@ -175,6 +182,8 @@ class ConstraintSolver {
     }
     if (!(options_.damping >= Scalar(0))) options_.damping = Scalar(0);
     if (!(options_.min_singular_value >= Scalar(0))) options_.min_singular_value = Scalar(0);
+    if (!(options_.vanishing_ratio >= Scalar(0))) options_.vanishing_ratio = Scalar(0);
+    reach_seen_ = Scalar(0);
   }
   const Options& options() const noexcept { return options_; }
 
@@ -243,6 +252,7 @@ class ConstraintSolver {
       return fail(out, Status::kNonFiniteResult);
     }
     set_warnings(D, g, out);
+    reach_seen_ = flag_vanishing_reach(options_.vanishing_ratio, reach_seen_, out.diagnostics);
     ready_ = true;
     return out.diagnostics.status;
   }
@@ -594,10 +604,11 @@ class ConstraintSolver {
   Scalar d_norm2_ = Scalar(0);              // ||D||_F^2
   Scalar inverse_gram_ = Scalar(0);         // 1 / (B B^T + lambda^2) when P = 1
   SolveDiagnostics<Scalar> factor_diagnostics_;  // what factorize reported
-  MatrixNN mass_l_ = MatrixNN::Identity();  // A = L L^T, lower triangle (dense)
-  MatrixNP bt_ = MatrixNP::Zero();  // B^T = L^-1 D^T
-  MatrixPP gram_l_inv_ = MatrixPP::Identity();  // L^-1 for B B^T + lambda^2 I = L L^T
-  MatrixNP svd_u_ = MatrixNP::Zero();  // B^T = U S V^T (kSvd)
+  Scalar reach_seen_ = Scalar(0);                // the largest sigma_max computed (kVanishingReach)
+  MatrixNN mass_l_ = MatrixNN::Identity();       // A = L L^T, lower triangle (dense)
+  MatrixNP bt_ = MatrixNP::Zero();               // B^T = L^-1 D^T
+  MatrixPP gram_l_inv_ = MatrixPP::Identity();   // L^-1 for B B^T + lambda^2 I = L L^T
+  MatrixNP svd_u_ = MatrixNP::Zero();            // B^T = U S V^T (kSvd)
   MatrixPP svd_v_ = MatrixPP::Identity();
   VectorP svd_sigma_ = VectorP::Zero();
   Scalar svd_damping2_ = Scalar(0);  // lambda^2 when kDampedLeastSquares fell back to the SVD

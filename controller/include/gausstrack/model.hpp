@@ -30,6 +30,13 @@
 // (eq. 33: m y'' = m g). The split changes neither Q' nor q'' (only f - Q enters eq. 32), but it
 // decides which of eq. (32)'s two terms a force appears in.
 //
+// Rows held by the environment (a wheel rolling without slip, a closed kinematic loop) rather than
+// by control are declared physical, by a mask over the rows above (bit i: row i, rows 0..63):
+//   static constexpr std::uint64_t kPhysicalRowMask = ...;
+// They are written and derived like any other row. The plant holds them; the law treats the
+// physically constrained system as the one it controls and never pushes along them
+// (actuation.hpp). The other rows are the task. At least one row must be a task row.
+//
 // Entries a model's evaluate never writes keep their previous value; ModelTerms starts at zero, so
 // a model with a diagonal A may write the diagonal only. Such a model should also declare
 //   static constexpr MassMatrix kMassMatrix = MassMatrix::kDiagonal;
@@ -37,7 +44,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <bit>
 #include <concepts>
+#include <cstdint>
 
 #include "gausstrack/jet.hpp"
 #include "gausstrack/mass_matrix.hpp"
@@ -72,6 +81,13 @@ constexpr int nonholonomic_rows() {
   if constexpr (requires { M::kNonholonomicRows; }) return M::kNonholonomicRows;
   else return 0;
 }
+template <typename M>
+constexpr std::uint64_t physical_row_mask() {
+  if constexpr (requires { M::kPhysicalRowMask; })
+    return static_cast<std::uint64_t>(M::kPhysicalRowMask);
+  else
+    return 0;
+}
 }  // namespace detail
 
 /// Row counts of a model's three kinds of constraint rows.
@@ -82,6 +98,13 @@ struct RowLayout {
   static constexpr int kAcceleration = M::kConstraints - kHolonomic - kNonholonomic;
   static constexpr int kFirstNonholonomic = kHolonomic;
   static constexpr int kFirstAcceleration = kHolonomic + kNonholonomic;
+  /// Rows held by the environment (M::kPhysicalRowMask), and the task rows, the others.
+  static constexpr std::uint64_t kPhysicalMask = detail::physical_row_mask<M>();
+  static constexpr int kPhysical = std::popcount(kPhysicalMask);
+  static constexpr int kTask = M::kConstraints - kPhysical;
+  static constexpr bool physical(int row) noexcept {
+    return row < 64 && ((kPhysicalMask >> row) & 1U) != 0;
+  }
 };
 
 /// How model M's mass matrix is stored (its kMassMatrix, or kDense when it declares none).
@@ -97,8 +120,12 @@ concept Model = requires(const M& m, const Eigen::Matrix<typename M::Scalar, M::
   requires std::floating_point<typename M::Scalar>;
   requires M::kDof >= 1 && M::kConstraints >= 1;
   requires RowLayout<M>::kHolonomic >= 0 && RowLayout<M>::kNonholonomic >= 0 &&
-               RowLayout<M>::kAcceleration >= 0;
-  { m.evaluate(q, q, t, terms) } noexcept;
+      RowLayout<M>::kAcceleration >= 0;
+  // Physical rows name existing rows, and leave at least one task row and one free direction.
+  requires M::kConstraints >= 64 || (RowLayout<M>::kPhysicalMask >> M::kConstraints) == 0;
+  requires RowLayout<M>::kTask >= 1 && RowLayout<M>::kPhysical < M::kDof;
+  { m.evaluate(q, q, t, terms) }
+  noexcept;
   requires RowLayout<M>::kHolonomic == 0 || requires {
     { m.phi(q, t) } -> std::convertible_to<Eigen::Matrix<typename M::Scalar, RowLayout<M>::kHolonomic, 1>>;
   };

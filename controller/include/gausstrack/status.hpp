@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 
 namespace gausstrack {
 
@@ -56,20 +57,38 @@ inline constexpr std::uint32_t kSaturated = 1u << 5;
 /// with a sampled-data hold, the law could not be evaluated at the predicted state (a non-finite
 /// prediction, a failed solve there): the force is the law's at the measured state, held.
 inline constexpr std::uint32_t kHoldAtMeasuredState = 1u << 6;
+/// the largest singular value of D A^(-1/2) (the rows' reach) fell below
+/// `SolverOptions::vanishing_ratio` times the largest this solver or controller has computed: the
+/// rows' gradient is vanishing as a whole (a one-row constraint at a point where its gradient is
+/// zero), so the force grows like 1 / reach. The rank tolerance and the condition estimate, both
+/// relative to the current reach, cannot see it. The answer is unchanged; a floor
+/// (`min_singular_value`) or a force limit bounds it.
+inline constexpr std::uint32_t kVanishingReach = 1u << 7;
 
 /// The number of warning kinds: bits 0 to kCount - 1.
-inline constexpr int kCount = 7;
+inline constexpr int kCount = 8;
 /// The kinds that say task rows were not met by the answer: inconsistent or given-up rows.
 inline constexpr std::uint32_t kRowsNotMet = kConstraintsNotMet | kNearSingular;
 
 /// The name of warning bit `bit` (0 .. kCount - 1), as summaries print it.
 constexpr const char* name(int bit) noexcept {
-  constexpr const char* kNames[kCount] = {"rank_deficient",   "constraints_not_met", "ill_conditioned",
-                                          "fell_back_to_svd", "near_singular",       "saturated",
-                                          "hold_at_measured_state"};
+  constexpr const char* kNames[kCount] = {
+      "rank_deficient", "constraints_not_met", "ill_conditioned",        "fell_back_to_svd",
+      "near_singular",  "saturated",           "hold_at_measured_state", "vanishing_reach"};
   return bit >= 0 && bit < kCount ? kNames[bit] : "unknown";
 }
 }  // namespace warning
+
+/// warning::kVanishingReach on `diagnostics` when its sigma_max is below `ratio` times `seen`, the
+/// largest reach before it; returns the largest reach including this one.
+template <typename Diagnostics, typename Scalar>
+Scalar flag_vanishing_reach(Scalar ratio, Scalar seen, Diagnostics& diagnostics) noexcept {
+  const Scalar reach = diagnostics.sigma_max;
+  if (!(reach >= Scalar(0)) || !(reach <= std::numeric_limits<Scalar>::max()))
+    return seen;  // NaN or Inf
+  if (reach < ratio * seen) diagnostics.warnings |= warning::kVanishingReach;
+  return reach > seen ? reach : seen;
+}
 
 /// A run's warnings, tallied call by call (or control period by control period): how many carried
 /// each kind, how many failed (no answer: zero force), and how many left task rows unmet

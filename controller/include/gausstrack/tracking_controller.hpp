@@ -106,6 +106,8 @@ struct ControllerOptions {
       return "solver.damping must be finite and >= 0";
     if (!std::isfinite(solver.min_singular_value) || solver.min_singular_value < Scalar(0))
       return "solver.min_singular_value must be finite and >= 0";
+    if (!std::isfinite(solver.vanishing_ratio) || solver.vanishing_ratio < Scalar(0))
+      return "solver.vanishing_ratio must be finite and >= 0";
     if (!std::isfinite(solver.rank_tolerance) || !std::isfinite(solver.fallback_rcond) ||
         !std::isfinite(solver.residual_tolerance) || !std::isfinite(solver.warn_condition))
       return "solver tolerances must be finite";
@@ -138,6 +140,11 @@ struct ControlOutput {
 /// after construction.
 template <Model M>
 class TrackingController {
+  static_assert(RowLayout<M>::kPhysical == 0,
+                "a model with physical rows is controlled by ActuatedController (LawFor<M>), which "
+                "leaves them "
+                "to the environment");
+
  public:
   using Scalar = typename M::Scalar;
   static constexpr int N = M::kDof;

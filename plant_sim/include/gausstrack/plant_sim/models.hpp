@@ -69,20 +69,48 @@ class PlantModel {
   virtual ~PlantModel() = default;
   virtual int dof() const noexcept = 0;
   /// A (dof x dof, symmetric positive definite), f and Q at (q, q', t).
-  virtual void evaluate(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, double t, Eigen::MatrixXd& A,
-                        Eigen::VectorXd& f, Eigen::VectorXd& Q) = 0;
+  virtual void evaluate(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, double t,
+                        Eigen::MatrixXd& A, Eigen::VectorXd& f, Eigen::VectorXd& Q) = 0;
+  /// The rows the environment holds (the model's physical rows), which the plant enforces.
+  virtual int physical_rows() const noexcept { return 0; }
+  /// Physical row k is a position-level (holonomic) row: its error e is phi.
+  virtual bool physical_holonomic(int) const noexcept { return false; }
+  /// The physical rows at (q, q', t): D_p q'' = g_p (rows physical_rows(), written into the
+  /// caller's D, g from row `first` on), with their position errors e (phi, 0 for a row from psi)
+  /// and velocity errors e' (phi', psi).
+  virtual void physical(const Eigen::VectorXd&, const Eigen::VectorXd&, double, int,
+                        Eigen::MatrixXd&, Eigen::VectorXd&, Eigen::VectorXd&, Eigen::VectorXd&) {}
 };
 
-/// A model's unconstrained dynamics as a plant (its constraint rows are the controller's task,
-/// not physics, and are not used).
+/// A model's dynamics as a plant, with the rows it declares physical held (its task rows are the
+/// controller's, not physics, and are not used).
 template <Model M>
 class ModelPlant final : public PlantModel {
  public:
   using V = Eigen::Matrix<double, M::kDof, 1>;
   explicit ModelPlant(M model) : model_(std::move(model)) {}
   int dof() const noexcept override { return M::kDof; }
-  void evaluate(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, double t, Eigen::MatrixXd& A, Eigen::VectorXd& f,
-                Eigen::VectorXd& Q) override {
+  int physical_rows() const noexcept override { return RowLayout<M>::kPhysical; }
+  bool physical_holonomic(int k) const noexcept override {
+    return row(k) < RowLayout<M>::kHolonomic;
+  }
+  void physical(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, double t, int first,
+                Eigen::MatrixXd& D, Eigen::VectorXd& g, Eigen::VectorXd& e,
+                Eigen::VectorXd& e_rate) override {
+    if constexpr (RowLayout<M>::kPhysical > 0) {
+      terms_ = {};
+      evaluate_model(model_, V(q), V(qd), t, terms_);
+      for (int k = 0; k < RowLayout<M>::kPhysical; ++k) {
+        const int r = row(k);
+        D.row(first + k) = terms_.constraint_matrix.row(r);
+        g(first + k) = terms_.constraint_rhs(r);
+        e(first + k) = terms_.constraint_error(r);
+        e_rate(first + k) = terms_.constraint_error_rate(r);
+      }
+    }
+  }
+  void evaluate(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, double t, Eigen::MatrixXd& A,
+                Eigen::VectorXd& f, Eigen::VectorXd& Q) override {
     terms_ = {};
     model_.evaluate(V(q), V(qd), t, terms_);
     A = terms_.mass_matrix;
@@ -91,6 +119,12 @@ class ModelPlant final : public PlantModel {
   }
 
  private:
+  // The model's row of physical row k.
+  static int row(int k) noexcept {
+    for (int i = 0, seen = 0; i < M::kConstraints; ++i)
+      if (RowLayout<M>::physical(i) && seen++ == k) return i;
+    return -1;
+  }
   M model_;
   TermsOf<M> terms_;
 };
@@ -100,6 +134,7 @@ class ModelPlant final : public PlantModel {
 struct ModelFactory {
   std::string name;
   int dof = 0;
+  int physical_rows = 0;  ///< rows the plant must hold for the law to track (RowLayout::kPhysical)
   std::vector<std::string> parameter_names;
   std::function<std::unique_ptr<ControlLaw>(const TrackingSpec&)> control_law;
   std::function<std::unique_ptr<PlantModel>(const std::vector<ModelParameter>&)> plant;
@@ -115,6 +150,7 @@ ModelFactory model_factory(std::string name, M defaults = {}) {
   ModelFactory f;
   f.name = name;
   f.dof = M::kDof;
+  f.physical_rows = RowLayout<M>::kPhysical;
   f.parameter_names = parameter_names<M>(defaults);
   f.control_law = [defaults](const TrackingSpec& spec) -> std::unique_ptr<ControlLaw> {
     return std::make_unique<ModelControlLaw<M>>(make_controller<M>(spec, defaults));

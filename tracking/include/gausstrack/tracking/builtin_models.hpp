@@ -10,6 +10,7 @@
 #include "gausstrack/systems/cart_double_pendulum.hpp"
 #include "gausstrack/systems/cart_pole.hpp"
 #include "gausstrack/systems/coupled_duffing.hpp"
+#include "gausstrack/systems/differential_drive.hpp"
 #include "gausstrack/systems/duffing_chain.hpp"
 #include "gausstrack/systems/nonholonomic_particle.hpp"
 #include "gausstrack/systems/pendulum.hpp"
@@ -34,14 +35,15 @@ bool visit_builtin_model(std::string_view name, F&& f) {
   if (name == "cart_double_pendulum")
     return f(std::type_identity<systems::CartDoublePendulum<double>>{}), true;
   if (name == "cart_pole") return f(std::type_identity<systems::CartPole<double>>{}), true;
+  if (name == "differential_drive")
+    return f(std::type_identity<systems::DifferentialDrive<double>>{}), true;
   return false;
 }
 
 /// Every name visit_builtin_model knows, in one list.
-inline constexpr const char* kBuiltinModels[] = {"coupled_duffing", "duffing_chain",
-                                                 "pendulum",        "nonholonomic_particle",
-                                                 "planar_arm",      "cart_double_pendulum",
-                                                 "cart_pole"};
+inline constexpr const char* kBuiltinModels[] = {
+    "coupled_duffing", "duffing_chain",        "pendulum",  "nonholonomic_particle",
+    "planar_arm",      "cart_double_pendulum", "cart_pole", "differential_drive"};
 
 /// Their names, for messages ("coupled_duffing, duffing_chain, ...").
 std::string builtin_model_names();

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "gausstrack/model.hpp"
@@ -54,8 +55,9 @@ void apply_parameters(M& m, const std::vector<ModelParameter>& parameters,
 }
 
 /// The controller the tracking section describes for model type M, starting from `model`'s
-/// parameters: an ActuatedController when M declares actuators (force_limit then limits each
-/// actuator), else a TrackingController. Throws ConfigError for options the controller refuses.
+/// parameters: an ActuatedController when M declares actuators or physical rows (force_limit then
+/// limits each actuator), else a TrackingController. Throws ConfigError for options the controller
+/// refuses.
 template <Model M>
 LawFor<M> make_controller(const TrackingSpec& spec, M model = {}) {
   apply_parameters(model, spec.parameters, spec.model);
@@ -69,12 +71,14 @@ LawFor<M> make_controller(const TrackingSpec& spec, M model = {}) {
   if (const char* error = o.validate()) throw ConfigError(spec.where + ": " + error);
   LawFor<M> controller(model, o);
   const auto limit = static_cast<typename M::Scalar>(spec.force_limit);
-  if constexpr (ActuatedModel<M>) controller.set_actuator_limit(LawFor<M>::VectorK::Constant(limit));
-  else controller.set_force_limit(LawFor<M>::VectorN::Constant(limit));
+  if constexpr (std::is_same_v<LawFor<M>, ActuatedController<M>>)
+    controller.set_actuator_limit(LawFor<M>::VectorK::Constant(limit));
+  else
+    controller.set_force_limit(LawFor<M>::VectorN::Constant(limit));
   return controller;
 }
 
-/// The tracking error of model m at (q, q', t): the constraint row of largest magnitude, at
+/// The tracking error of model m at (q, q', t): the task row of largest magnitude, at
 /// position level for rows derived from phi and at velocity level for rows from psi (0 for
 /// hand-written rows, which have neither).
 template <Model M>
@@ -85,6 +89,7 @@ double tracking_error(const M& m, const Eigen::Matrix<double, M::kDof, 1>& q,
   double worst = 0;
   constexpr int kH = RowLayout<M>::kHolonomic, kV = RowLayout<M>::kNonholonomic;
   for (int k = 0; k < kH + kV; ++k) {
+    if (RowLayout<M>::physical(k)) continue;  // the plant's, not the task's
     const double e = k < kH ? terms.constraint_error(k) : terms.constraint_error_rate(k);
     if (std::abs(e) > std::abs(worst) || !std::isfinite(e)) worst = e;
   }
