@@ -163,6 +163,23 @@ class ActuatedController {
     return true;
   }
 
+  /// Switches task row `row` on or off at run time (a tool touching a surface, a phase of a gait):
+  /// an inactive row is neither held nor counted (no rank deficiency, never in unmet_rows; its
+  /// row_residual still says how far the motion is from it). Nothing is allocated or rebuilt: the
+  /// task matrix keeps its size with the inactive rows zero, which its SVD gives up exactly. A
+  /// row that comes back is stabilized from its current error (Baumgarte's correction has no
+  /// memory), and the hold's jerk estimate starts again at the switch. Returns false, changing
+  /// nothing, for a row out of range or a physical row (the environment holds it regardless).
+  bool set_row_active(int row, bool active) noexcept {
+    if (row < 0 || row >= P || RowLayout<M>::physical(row)) return false;
+    if (active_[static_cast<std::size_t>(row)] != active) prediction_.forget();
+    active_[static_cast<std::size_t>(row)] = active;
+    return true;
+  }
+  bool row_active(int row) const noexcept {
+    return row >= 0 && row < P && !RowLayout<M>::physical(row) && active_[static_cast<std::size_t>(row)];
+  }
+
   /// The weight W of the cost u^T W u (symmetric positive definite; only its lower triangle is
   /// read). Returns false, changing nothing, otherwise.
   bool set_weight(const MatrixKK& w) noexcept {
@@ -252,7 +269,7 @@ class ActuatedController {
 
     VectorP correction = VectorP::Zero();
     for (int i = 0; i < P; ++i) {
-      if (RowLayout<M>::physical(i)) continue;
+      if (RowLayout<M>::physical(i) || !active_[static_cast<std::size_t>(i)]) continue;
       const Stabilization<Scalar>& s = row_gains_[static_cast<std::size_t>(i)];
       if (s.enabled())
         correction(i) = -(Scalar(2) * s.zeta * s.omega) * terms_.constraint_error_rate(i) -
@@ -273,8 +290,18 @@ class ActuatedController {
 
     // The task rows' C_c^T, and with physical rows: a_p, and C_c^T projected onto the directions
     // the physical rows leave free (the projector is symmetric, so C_c P_n = (P_n C_c^T)^T).
+    // An inactive row's column is zero: the SVD below gives its direction up exactly.
     Eigen::Matrix<Scalar, N, kTask> ctc;
-    for (int j = 0; j < kTask; ++j) ctc.col(j) = ct.col(kTaskRows[static_cast<std::size_t>(j)]);
+    int active_rows = 0;
+    for (int j = 0; j < kTask; ++j) {
+      const int row = kTaskRows[static_cast<std::size_t>(j)];
+      if (active_[static_cast<std::size_t>(row)]) {
+        ctc.col(j) = ct.col(row);
+        ++active_rows;
+      } else {
+        ctc.col(j).setZero();
+      }
+    }
     if constexpr (kPhysical > 0) {
       Eigen::Matrix<Scalar, N, kPhysical> up;  // C_p^T, then U_p
       Eigen::Matrix<Scalar, kPhysical, 1> sp, rp;
@@ -380,7 +407,10 @@ class ActuatedController {
     // v = task^+ r for each part of r (its task rows), then u = back v.
     auto control_for = [&](const VectorP& all) -> VectorK {
       Eigen::Matrix<Scalar, kTask, 1> r;
-      for (int j = 0; j < kTask; ++j) r(j) = all(kTaskRows[static_cast<std::size_t>(j)]);
+      for (int j = 0; j < kTask; ++j) {
+        const int row = kTaskRows[static_cast<std::size_t>(j)];
+        r(j) = active_[static_cast<std::size_t>(row)] ? all(row) : Scalar(0);
+      }
       VectorK x;
       if constexpr (K >= kTask)
         x = w * (inverse.asDiagonal() * (v.transpose() * r));  // task^T = w S v^T
@@ -399,7 +429,7 @@ class ActuatedController {
     d.sigma_max = sigma(0);
     d.sigma_min_kept = rank > 0 ? sigma(rank - 1) : Scalar(0);
     d.condition_estimate = rank > 0 ? reach / sigma(rank - 1) : Scalar(0);
-    if (rank < kTask) d.warnings |= warning::kRankDeficient;
+    if (rank < active_rows) d.warnings |= warning::kRankDeficient;
     if (near_singular) d.warnings |= warning::kNearSingular;
     if (d.condition_estimate > options_.solver.warn_condition)
       d.warnings |= warning::kIllConditioned;
@@ -440,7 +470,7 @@ class ActuatedController {
       const Scalar scale2 = g(i) * g(i) + terms_.constraint_matrix.row(i).squaredNorm() * acceleration2;
       const Scalar tol = options_.solver.residual_tolerance;
       const bool met = std::abs(out.row_residual(i)) <= tol * std::sqrt(scale2);  // false for NaN
-      if (!met && i < 64) out.unmet_rows |= std::uint64_t{1} << i;
+      if (!met && i < 64 && active_[static_cast<std::size_t>(i)]) out.unmet_rows |= std::uint64_t{1} << i;
     }
     d.residual_norm = out.row_residual.norm();
     if (out.unmet_rows != 0) d.warnings |= warning::kConstraintsNotMet;
@@ -492,6 +522,13 @@ class ActuatedController {
   Eigen::Matrix<Scalar, N, (kPhysical > 0 ? kPhysical : 1)> physical_basis_;
   int free_basis_rank_ = 0;
   Scalar reach_seen_ = Scalar(0);  ///< the largest reach computed (kVanishingReach)
+  /// Rows switched on (physical rows stay true: they are always held).
+  std::array<bool, static_cast<std::size_t>(P)> active_ = all_active();
+  static constexpr std::array<bool, static_cast<std::size_t>(P)> all_active() noexcept {
+    std::array<bool, static_cast<std::size_t>(P)> a{};
+    for (bool& b : a) b = true;
+    return a;
+  }
 };
 
 /// The controller for model M: ActuatedController when M declares actuators or physical rows, else
