@@ -79,6 +79,7 @@ nlohmann::ordered_json summary_json(const Scene& scene, const RunResult& result)
   j["max_tracking_error"] = s.max_tracking_error;
   j["rms_tracking_error"] = s.rms_tracking_error;
   j["max_constraint_residual"] = s.max_constraint_residual;
+  j["force_total_variation"] = s.force_total_variation;
   j["steps"] = s.steps;
   j["rhs_evaluations"] = s.rhs_evaluations;
   j["control_evaluations"] = s.control_evaluations;

@@ -112,7 +112,13 @@ RunResult Run::execute() {
     }
   }
   double sum_squares = 0;
-  for (const Sample& smp : result_.samples) sum_squares += smp.tracking_error * smp.tracking_error;
+  for (std::size_t k = 0; k < result_.samples.size(); ++k) {
+    const Sample& smp = result_.samples[k];
+    sum_squares += smp.tracking_error * smp.tracking_error;
+    if (k > 0)
+      for (std::size_t i = 0; i < smp.u.size(); ++i)
+        stats_.force_total_variation += std::abs(smp.u[i] - result_.samples[k - 1].u[i]);
+  }
   if (!result_.samples.empty())
     stats_.rms_tracking_error = std::sqrt(sum_squares / static_cast<double>(result_.samples.size()));
   stats_.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();

@@ -181,11 +181,12 @@ TEST(PhysicalRows, TrackingTheAxleCentreIsFlaggedAsNotActuable) {
 }
 
 // A model without physical rows or actuators, through the actuated law (B = I, Gauss's weight),
-// gets TrackingController's eq. (32) force, stabilization included.
+// gets TrackingController's eq. (32) force, stabilization and robust term included.
 TEST(PhysicalRows, NoneDeclaredGivesTodaysLaw) {
   using Duffing = systems::CoupledDuffing<double>;
   ControllerOptions<double> o;
   o.stabilization = {0.7, 15.0};
+  o.robust = {30.0, 0.05};  // the robust term, shared by both
   ActuatedController<Duffing> actuated(Duffing{}, o);
   TrackingController<Duffing> plain(Duffing{}, o);
   RandomSource<double> rng(test_seed() + 3);

@@ -182,6 +182,37 @@ TEST(PlanarArm, StabilizationRecoversAsTheGainsPredict) {
   EXPECT_TRUE(near(kept.back().second, e0, 1e-7, 1, "error kept"));
 }
 
+// The robust term in closed form on the Duffing pair's one row: it adds
+// D^T (D A^-1 D^T)^-1 (-rho sat(s / Phi)), s = e' + omega e, to the stabilizing force, inside the
+// boundary layer (linear in s) and outside it (rho itself); off, the force is Baumgarte's alone.
+TEST(TrackingController, RobustTermIsTheSaturatedSlidingCorrection) {
+  ControllerOptions<double> plain_options, robust_options;
+  plain_options.stabilization = robust_options.stabilization = {1.0, 20.0};
+  robust_options.robust = {50.0, 0.01};
+  TrackingController<Duffing> plain(Duffing{}, plain_options), robust(Duffing{}, robust_options);
+  for (const double offset : {1e-5, 3e-4, -2e-2}) {  // |s| well inside, near, and outside the layer
+    const Eigen::Vector2d q(0.3 + offset, 0.1), qd(0.2, -0.1);
+    TrackingController<Duffing>::Output a, b;
+    ASSERT_EQ(plain.compute(q, qd, 0.4, a), Status::kOk);
+    ASSERT_EQ(robust.compute(q, qd, 0.4, b), Status::kOk);
+    const auto& t = plain.terms();
+    const double s = a.constraint_error_rate(0) + 20.0 * a.constraint_error(0);
+    const double sat = std::max(-1.0, std::min(1.0, s / 0.01));
+    const Eigen::RowVector2d D = t.constraint_matrix;
+    const double gram = (D * t.mass_matrix.inverse() * D.transpose())(0, 0);
+    const Eigen::Vector2d expected = D.transpose() * (-50.0 * sat / gram);
+    EXPECT_TRUE(near(Eigen::Vector2d(b.stabilizing - a.stabilizing), expected, 1e-10, 1 + expected.norm(), "robust"))
+        << "s = " << s;
+    EXPECT_TRUE(near(Eigen::Vector2d(b.feedforward), Eigen::Vector2d(a.feedforward), 1e-12, 1 + a.force.norm(), "ff"));
+  }
+  EXPECT_NEAR(robust_error_bound(robust_options.stabilization, robust_options.robust),
+              50.0 / (20.0 * (20.0 + 50.0 / 0.01)), 1e-18);
+  EXPECT_FALSE(robust.set_robust(0, {1.0, 0.0}));  // a layer must be > 0
+  EXPECT_FALSE(robust.set_robust(1, {1.0, 1.0}));  // one row only
+  robust_options.robust.bound = -1;
+  EXPECT_NE(robust_options.validate(), nullptr);
+}
+
 TEST(TrackingController, NonFiniteStateFailsWithZeroOutput) {
   TrackingController<Duffing> controller({}, stabilized(1, 5));
   TrackingController<Duffing>::Output out;

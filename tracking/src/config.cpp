@@ -40,7 +40,7 @@ void check_parameter_names(const Reader& parent, const char* key, const std::str
 }
 
 TrackingSpec read_tracking(const Reader& t) {
-  t.allow_only({"model", "parameters", "trajectory", "stabilization", "strategy", "force_limit",
+  t.allow_only({"model", "parameters", "trajectory", "stabilization", "robust", "strategy", "force_limit",
                 "min_singular_value", "hold", "delay", "unmet_limit"});
   TrackingSpec tr;
   tr.enabled = true;
@@ -63,6 +63,12 @@ TrackingSpec read_tracking(const Reader& t) {
     st.allow_only({"zeta", "omega"});
     tr.zeta = st.non_negative("zeta", 1.0);
     tr.stabilization_omega = st.non_negative("omega", 0.0);
+  }
+  if (t.has("robust")) {
+    const Reader r = t.child("robust");
+    r.allow_only({"bound", "layer"});
+    tr.robust_bound = r.positive("bound");
+    tr.robust_layer = r.positive("layer");
   }
   tr.force_limit = t.positive("force_limit", tr.force_limit);
   tr.min_singular_value = t.non_negative("min_singular_value", tr.min_singular_value);

@@ -145,6 +145,15 @@ class ActuatedController {
       : model_(std::move(model)), options_(options) {
     if (const char* problem = options.validate()) config_error(problem);
     row_gains_.fill(options.stabilization);
+    row_robust_.fill(options.robust);
+  }
+
+  /// The robust term of one task row, as TrackingController::set_robust (false for a physical
+  /// row).
+  bool set_robust(int row, const Robust<Scalar>& robust) noexcept {
+    if (row < 0 || row >= P || RowLayout<M>::physical(row) || robust.validate() != nullptr) return false;
+    row_robust_[static_cast<std::size_t>(row)] = robust;
+    return true;
   }
 
   M& model() noexcept { return model_; }
@@ -270,10 +279,9 @@ class ActuatedController {
     VectorP correction = VectorP::Zero();
     for (int i = 0; i < P; ++i) {
       if (RowLayout<M>::physical(i) || !active_[static_cast<std::size_t>(i)]) continue;
-      const Stabilization<Scalar>& s = row_gains_[static_cast<std::size_t>(i)];
-      if (s.enabled())
-        correction(i) = -(Scalar(2) * s.zeta * s.omega) * terms_.constraint_error_rate(i) -
-                        (s.omega * s.omega) * terms_.constraint_error(i);
+      const auto k = static_cast<std::size_t>(i);
+      correction(i) =
+          row_correction(row_gains_[k], row_robust_[k], terms_.constraint_error(i), terms_.constraint_error_rate(i));
     }
 
     // A = L L^T; a = A^-1 (Q - f); L^-1 B; C^T = L^-1 D^T.
@@ -507,6 +515,7 @@ class ActuatedController {
   M model_;
   Options options_;
   std::array<Stabilization<Scalar>, static_cast<std::size_t>(P)> row_gains_{};
+  std::array<Robust<Scalar>, static_cast<std::size_t>(P)> row_robust_{};
   VectorK limit_ = VectorK::Constant(std::numeric_limits<Scalar>::infinity());
   bool gauss_weight_ = true;
   MatrixKK weight_factor_ = MatrixKK::Identity();

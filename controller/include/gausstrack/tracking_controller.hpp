@@ -27,6 +27,52 @@ struct Stabilization {
   bool enabled() const noexcept { return omega > Scalar(0); }
 };
 
+/// A robust term for a model that is wrong, per row: with a declared bound rho on the model's
+/// error at the row's acceleration level (|D_i q''_plant - D_i q''_model| <= rho [row units/s^2]),
+/// the row's g gains -rho sat(s / Phi), s = e' + omega e the row's sliding variable (omega the
+/// row's Baumgarte frequency; e = 0 for a nonholonomic row), sat(x) = max(-1, min(1, x)): the
+/// generalized sliding surface of Udwadia and Wanichanon's control of uncertain multibody
+/// systems, with a boundary layer of width Phi [row units/s] so that the force stays continuous.
+/// With Baumgarte's gains at zeta = 1, s' = -omega s - rho sat(s / Phi) + delta: outside the layer
+/// s shrinks at least like e^(-omega t), inside it |s| <= rho / (omega + rho / Phi), so that a
+/// holonomic row's error ends within
+///   |e| <= rho / (omega (omega + rho / Phi))                     (robust_error_bound)
+/// against rho / omega^2 with stabilization alone: 1 + rho / (omega Phi) times smaller, at the
+/// price of a gain rho / Phi inside the layer. bound = 0 (the default): no robust term.
+template <typename Scalar>
+struct Robust {
+  Scalar bound = Scalar(0);  ///< rho [row units/s^2]; 0 disables the term
+  Scalar layer = Scalar(1);  ///< Phi [row units/s], > 0
+  bool enabled() const noexcept { return bound > Scalar(0); }
+  /// nullptr when usable, else what is wrong.
+  const char* validate() const noexcept {
+    if (!std::isfinite(bound) || !(bound >= Scalar(0))) return "robust.bound must be finite and >= 0";
+    if (!std::isfinite(layer) || !(layer > Scalar(0))) return "robust.layer must be finite and > 0";
+    return nullptr;
+  }
+};
+
+/// The ultimate bound the robust term promises on a holonomic row's error (Robust's formula; the
+/// gains at zeta = 1), or infinity when either is off.
+template <typename Scalar>
+Scalar robust_error_bound(const Stabilization<Scalar>& s, const Robust<Scalar>& r) noexcept {
+  if (!s.enabled() || !r.enabled()) return std::numeric_limits<Scalar>::infinity();
+  return r.bound / (s.omega * (s.omega + r.bound / r.layer));
+}
+
+/// The correction to one row's g: Baumgarte's, -2 zeta omega e' - omega^2 e, plus the robust
+/// term, -rho sat((e' + omega e) / Phi). Shared by the controllers.
+template <typename Scalar>
+Scalar row_correction(const Stabilization<Scalar>& s, const Robust<Scalar>& r, Scalar e, Scalar e_rate) noexcept {
+  Scalar c = Scalar(0);
+  if (s.enabled()) c = -(Scalar(2) * s.zeta * s.omega) * e_rate - (s.omega * s.omega) * e;
+  if (r.enabled()) {
+    const Scalar x = (e_rate + s.omega * e) / r.layer;
+    c -= r.bound * (x > Scalar(1) ? Scalar(1) : (x < Scalar(-1) ? Scalar(-1) : x));
+  }
+  return c;
+}
+
 /// Sampled-data control: the force computed for a state measured at t is applied from t + delay
 /// and held for one period (zero-order hold). The law at the measured state, held, meets the
 /// constraints to first order in the period; with a hold the controller evaluates the law at the
@@ -93,6 +139,8 @@ struct ControllerOptions {
   Stabilization<Scalar> stabilization{};
   /// Sampled-data hold (none by default); TrackingController::set_hold changes it.
   Hold<Scalar> hold{};
+  /// The robust term for every row (off by default); set_robust changes one row's.
+  Robust<Scalar> robust{};
 
   /// nullptr when the options are usable, else what is wrong with them. Never throws.
   const char* validate() const noexcept {
@@ -102,6 +150,7 @@ struct ControllerOptions {
       return "stabilization.omega must be finite and >= 0";
     if (!std::isfinite(hold.period) || hold.period < Scalar(0) || !std::isfinite(hold.delay) || hold.delay < Scalar(0))
       return "hold.period and hold.delay must be finite and >= 0";
+    if (const char* problem = robust.validate()) return problem;
     if (!std::isfinite(solver.damping) || solver.damping < Scalar(0))
       return "solver.damping must be finite and >= 0";
     if (!std::isfinite(solver.min_singular_value) || solver.min_singular_value < Scalar(0))
@@ -161,11 +210,23 @@ class TrackingController {
       : model_(std::move(model)), options_(options), solver_(options.solver) {
     if (const char* problem = options.validate()) config_error(problem);
     row_gains_.fill(options.stabilization);
+    row_robust_.fill(options.robust);
   }
 
   M& model() noexcept { return model_; }
   const M& model() const noexcept { return model_; }
   const Options& options() const noexcept { return options_; }
+
+  /// The robust term of one row (Robust). Returns false, changing nothing, for a row outside
+  /// [0, P) or a term that does not validate.
+  bool set_robust(int row, const Robust<Scalar>& robust) noexcept {
+    if (row < 0 || row >= P || robust.validate() != nullptr) return false;
+    row_robust_[static_cast<std::size_t>(row)] = robust;
+    return true;
+  }
+  Robust<Scalar> robust(int row) const noexcept {
+    return row < 0 || row >= P ? Robust<Scalar>{} : row_robust_[static_cast<std::size_t>(row)];
+  }
 
   /// Baumgarte gains of one constraint row (rows in the model's order: holonomic, nonholonomic,
   /// hand-written). Returns false, changing nothing, for a row outside [0, P) or gains that are
@@ -251,15 +312,15 @@ class TrackingController {
     out.constraint_error = terms_.constraint_error;
     out.constraint_error_rate = terms_.constraint_error_rate;
 
-    // Baumgarte's correction to g, row by row (zero for rows whose gains are off).
+    // Baumgarte's correction to g and the robust term, row by row (zero for rows with neither).
     VectorP correction = VectorP::Zero();
     bool stabilized = false;
     for (int i = 0; i < P; ++i) {
-      const Stabilization<Scalar>& s = row_gains_[static_cast<std::size_t>(i)];
-      if (!s.enabled()) continue;
+      const auto k = static_cast<std::size_t>(i);
+      if (!row_gains_[k].enabled() && !row_robust_[k].enabled()) continue;
       stabilized = true;
-      correction(i) = -(Scalar(2) * s.zeta * s.omega) * terms_.constraint_error_rate(i) -
-                      (s.omega * s.omega) * terms_.constraint_error(i);
+      correction(i) = row_correction(row_gains_[k], row_robust_[k], terms_.constraint_error(i),
+                                     terms_.constraint_error_rate(i));
     }
 
     const VectorP g = terms_.constraint_rhs + correction;
@@ -306,6 +367,7 @@ class TrackingController {
   M model_;
   Options options_;
   std::array<Stabilization<Scalar>, static_cast<std::size_t>(P)> row_gains_{};
+  std::array<Robust<Scalar>, static_cast<std::size_t>(P)> row_robust_{};
   VectorN force_limit_ = VectorN::Constant(std::numeric_limits<Scalar>::infinity());
   Terms terms_{};
   HoldPrediction<N, Scalar> prediction_;  ///< the hold's memory

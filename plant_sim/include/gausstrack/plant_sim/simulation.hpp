@@ -30,6 +30,9 @@ struct RunSummary {
   double max_tracking_error = 0;
   double rms_tracking_error = 0;  ///< over the samples
   double max_constraint_residual = 0;
+  /// The applied force's total variation over the samples, sum_k ||u_k - u_(k-1)||_1 [N]: how much
+  /// the force moves (a chattering force's grows with the sampling).
+  double force_total_variation = 0;
   std::uint64_t steps = 0;            ///< accepted integrator steps
   std::uint64_t rhs_evaluations = 0;  ///< evaluations of the equations of motion
   std::uint64_t control_evaluations = 0;

@@ -45,6 +45,9 @@ struct TrackingSpec {
   std::string where;                       ///< where `model` was written
   std::vector<ModelParameter> parameters;  ///< tracking.parameters, then tracking.trajectory
   double zeta = 1, stabilization_omega = 0;
+  /// The robust term (tracking.robust: bound [row units/s^2], layer [row units/s]) for every
+  /// row; bound 0: none.
+  double robust_bound = 0, robust_layer = 1;
   InverseStrategy strategy = InverseStrategy::kCholeskyWithFallback;
   /// Actuator limit on every coordinate [N]: no command exceeds it (saturation is reported).
   double force_limit = std::numeric_limits<double>::infinity();

@@ -66,6 +66,7 @@ LawFor<M> make_controller(const TrackingSpec& spec, M model = {}) {
   o.solver.min_singular_value = static_cast<typename M::Scalar>(spec.min_singular_value);
   o.stabilization = {static_cast<typename M::Scalar>(spec.zeta),
                      static_cast<typename M::Scalar>(spec.stabilization_omega)};
+  o.robust = {static_cast<typename M::Scalar>(spec.robust_bound), static_cast<typename M::Scalar>(spec.robust_layer)};
   if (spec.hold == HoldLaw::kMidpoint)
     o.hold = {static_cast<typename M::Scalar>(spec.period), static_cast<typename M::Scalar>(spec.delay)};
   if (const char* error = o.validate()) throw ConfigError(spec.where + ": " + error);
