@@ -66,8 +66,6 @@ TEST(Actuation, AnUnactuatedRowIsNamedAndRedundantActuatorsShareByTheWeight) {
   EXPECT_FALSE(redundant.set_weight(Eigen::Vector2d(1.0, -4.0).asDiagonal().toDenseMatrix()));
 }
 
-// Columns of B that are dependent (the second three times the first) make Gauss's weight
-// singular: refused, not answered with a command of 1 / eps along B's null space.
 // The actuated law keeps the same history of its reach as the solver: one row D = s (0.8, 0.6)
 // through two actuators, shrinking from s = 1, is flagged once s < sqrt(eps), and its commands,
 // still computed, grow like 1 / s.
@@ -91,6 +89,8 @@ TEST(Actuation, AVanishingReachIsFlaggedAgainstTheLawsHistory) {
   }
 }
 
+// Columns of B that are dependent (the second three times the first) make Gauss's weight
+// singular: refused, not answered with a command of 1 / eps along B's null space.
 TEST(Actuation, DependentActuatorsAreRefusedUnderGausssWeight) {
   RandomSource<double> rng(19);
   GivenSystem<3, 1, 2> sys = GivenSystem<3, 1, 2>::random(rng);

@@ -125,6 +125,30 @@ TEST(PhysicalRows, ActuatedCommandsAreTheLeastCostOnes) {
   }
 }
 
+// A task row the physical rows already hold (parallel to one, consistent with it): after the
+// projection only rounding is left of it, which the law gives up (rank deficient) instead of
+// answering with commands of size 1 / eps; the answer is the law without that row, and the row is
+// met all the same, by the environment.
+TEST(PhysicalRows, ATaskRowThePhysicalRowsHoldIsGivenUp) {
+  RandomSource<double> rng(test_seed() + 6);
+  using S = GivenPhysical<5, 3, 5, 0b001>;
+  for (int k = 0; k < 20; ++k) {
+    S sys = S::random(rng);
+    sys.D.row(1) = 2.5 * sys.D.row(0);
+    sys.g(1) = 2.5 * sys.g(0);
+    ActuatedController<S> c(sys), without(sys);
+    ASSERT_TRUE(without.set_row_active(1, false));
+    ActuatedController<S>::Output out, expected;
+    const Eigen::Matrix<double, 5, 1> zero = Eigen::Matrix<double, 5, 1>::Zero();
+    ASSERT_EQ(c.compute(zero, zero, 0.0, out), Status::kOk);
+    ASSERT_EQ(without.compute(zero, zero, 0.0, expected), Status::kOk);
+    EXPECT_EQ(out.diagnostics.rank, 1);
+    EXPECT_TRUE(out.diagnostics.has(warning::kRankDeficient));
+    EXPECT_TRUE(near(out.control, expected.control, 1e-9, 1 + expected.control.norm(), "u"));
+    EXPECT_EQ(out.unmet_rows, 0u);
+  }
+}
+
 // The differential drive at random states, stabilization on: the commands are the least-cost ones
 // for the stabilized task, the no-slip row holds under the law's acceleration, and B = (drive,
 // yaw) gives no sideways force.

@@ -185,28 +185,35 @@ TEST(PlanarArm, StabilizationRecoversAsTheGainsPredict) {
 // The robust term in closed form on the Duffing pair's one row: it adds
 // D^T (D A^-1 D^T)^-1 (-rho sat(s / Phi)), s = e' + omega e, to the stabilizing force, inside the
 // boundary layer (linear in s) and outside it (rho itself); off, the force is Baumgarte's alone.
+// The states are put on the path (the row is x1 - x2 - x_d(t), so x1 and x1' move e and e' one for
+// one) and then given the sliding variable s = 0.02, 0.9 and 3 layers.
 TEST(TrackingController, RobustTermIsTheSaturatedSlidingCorrection) {
   ControllerOptions<double> plain_options, robust_options;
   plain_options.stabilization = robust_options.stabilization = {1.0, 20.0};
   robust_options.robust = {50.0, 0.01};
   TrackingController<Duffing> plain(Duffing{}, plain_options), robust(Duffing{}, robust_options);
-  for (const double offset : {1e-5, 3e-4, -2e-2}) {  // |s| well inside, near, and outside the layer
-    const Eigen::Vector2d q(0.3 + offset, 0.1), qd(0.2, -0.1);
+  for (const double layers : {0.02, -0.9, 3.0}) {
+    Eigen::Vector2d q(0.3, 0.1), qd(0.2, -0.1);
     TrackingController<Duffing>::Output a, b;
     ASSERT_EQ(plain.compute(q, qd, 0.4, a), Status::kOk);
+    q(0) -= a.constraint_error(0);                                 // e = 0
+    qd(0) += layers * 0.01 - a.constraint_error_rate(0);          // e' = s
+    ASSERT_EQ(plain.compute(q, qd, 0.4, a), Status::kOk);
+    ASSERT_NEAR(a.constraint_error_rate(0) + 20.0 * a.constraint_error(0), layers * 0.01, 1e-12);
     ASSERT_EQ(robust.compute(q, qd, 0.4, b), Status::kOk);
     const auto& t = plain.terms();
-    const double s = a.constraint_error_rate(0) + 20.0 * a.constraint_error(0);
-    const double sat = std::max(-1.0, std::min(1.0, s / 0.01));
+    const double sat = layers < 1.0 ? layers : 1.0;  // s / Phi, clipped at one layer
     const Eigen::RowVector2d D = t.constraint_matrix;
     const double gram = (D * t.mass_matrix.inverse() * D.transpose())(0, 0);
     const Eigen::Vector2d expected = D.transpose() * (-50.0 * sat / gram);
     EXPECT_TRUE(near(Eigen::Vector2d(b.stabilizing - a.stabilizing), expected, 1e-10, 1 + expected.norm(), "robust"))
-        << "s = " << s;
+        << "s / Phi = " << layers;
     EXPECT_TRUE(near(Eigen::Vector2d(b.feedforward), Eigen::Vector2d(a.feedforward), 1e-12, 1 + a.force.norm(), "ff"));
   }
   EXPECT_NEAR(robust_error_bound(robust_options.stabilization, robust_options.robust),
               50.0 / (20.0 * (20.0 + 50.0 / 0.01)), 1e-18);
+  EXPECT_EQ(robust_error_bound(Stabilization<double>{0.7, 20.0}, robust_options.robust),
+            std::numeric_limits<double>::infinity());  // no promise off zeta = 1
   EXPECT_FALSE(robust.set_robust(0, {1.0, 0.0}));  // a layer must be > 0
   EXPECT_FALSE(robust.set_robust(1, {1.0, 1.0}));  // one row only
   robust_options.robust.bound = -1;

@@ -21,7 +21,9 @@
 //   M_p = A^(-1/2) (I - (D_p A^(-1/2))^+ D_p A^(-1/2)) A^(-1/2),
 // and the task rows D_c become D_c M_p B u = g_c - D_c a_p. The control then never pushes along
 // the physical rows: with B = I and Gauss's weight, D_p A^-1 u = 0. Physical rows are neither
-// stabilized nor counted as the task; their residual under the law's acceleration is reported.
+// stabilized nor switched; their residual under the law's acceleration is reported, and a
+// physical row even the environment could not hold (inconsistent physical rows) is named in
+// unmet_rows like a task row.
 //
 // When D_c M_p B has rank below its task rows, some rows cannot be actuated: u meets the rows in
 // the least-squares sense, warning::kRankDeficient is set, and `unmet_rows` says which rows are
@@ -200,6 +202,10 @@ class ActuatedController {
   }
   /// Back to Gauss's weight, B^T A^-1 B (the default).
   void use_gauss_weight() noexcept { gauss_weight_ = true; }
+  /// The robust term of one row (off for a row out of range or a physical row).
+  Robust<Scalar> robust(int row) const noexcept {
+    return row < 0 || row >= P || RowLayout<M>::physical(row) ? Robust<Scalar>{} : row_robust_[static_cast<std::size_t>(row)];
+  }
   bool gauss_weight() const noexcept { return gauss_weight_; }
 
   /// Actuator limits |u_i| <= limit_i: u beyond them is scaled down as a whole (warning::kSaturated,
@@ -301,10 +307,12 @@ class ActuatedController {
     // An inactive row's column is zero: the SVD below gives its direction up exactly.
     Eigen::Matrix<Scalar, N, kTask> ctc;
     int active_rows = 0;
+    Scalar active_reach2 = Scalar(0);  // ||C_c||_F^2 of the active rows, before any projection
     for (int j = 0; j < kTask; ++j) {
       const int row = kTaskRows[static_cast<std::size_t>(j)];
       if (active_[static_cast<std::size_t>(row)]) {
         ctc.col(j) = ct.col(row);
+        active_reach2 += ctc.col(j).squaredNorm();
         ++active_rows;
       } else {
         ctc.col(j).setZero();
@@ -397,9 +405,15 @@ class ActuatedController {
     // directions: they are measured against D A^(-1/2) itself (its Frobenius norm), so that
     // actuators that barely reach the rows (one row, one actuator, its reach vanishing) show as
     // ill-conditioned instead of a condition of 1.
-    const Scalar reach = gauss_weight_ ? std::max(sigma(0), ctc.norm()) : sigma(0);
-    const Scalar relative =
-        (options_.solver.rank_tolerance > Scalar(0) ? options_.solver.rank_tolerance : Scalar(kRows) * eps) * reach;
+    // The reach is that of the active task rows before the physical rows' projection: a task row
+    // the physical rows already hold (or nearly) then shows as lost, not as a full-rank row of
+    // rounding-sized singular values. The default relative tolerance covers the projection's
+    // rounding too.
+    const Scalar unprojected = std::sqrt(active_reach2);
+    const Scalar reach = gauss_weight_ ? std::max(sigma(0), unprojected) : sigma(0);
+    const Scalar relative = (options_.solver.rank_tolerance > Scalar(0) ? options_.solver.rank_tolerance
+                                                                        : Scalar(kPhysical > 0 ? kRows + N : kRows) * eps) *
+                            reach;
     const Scalar floor = std::max(relative, options_.solver.min_singular_value);
     int rank = 0;
     bool near_singular = false;
@@ -441,8 +455,12 @@ class ActuatedController {
     if (near_singular) d.warnings |= warning::kNearSingular;
     if (d.condition_estimate > options_.solver.warn_condition)
       d.warnings |= warning::kIllConditioned;
-    d.sigma_max = reach;  // the rows' reach, for the history of kVanishingReach
-    reach_seen_ = flag_vanishing_reach(options_.solver.vanishing_ratio, reach_seen_, d);
+    // The history of kVanishingReach: the active rows' own reach (the weight and the physical
+    // rows aside), and nothing to judge with every row switched off.
+    if (active_rows > 0) {
+      d.sigma_max = unprojected;
+      reach_seen_ = flag_vanishing_reach(options_.solver.vanishing_ratio, reach_seen_, d);
+    }
     d.sigma_max = sigma(0);
 
     // Actuator limits: u and its parts scaled as a whole.
@@ -521,14 +539,15 @@ class ActuatedController {
   MatrixKK weight_factor_ = MatrixKK::Identity();
   TermsOf<M> terms_{};
   MatrixNK b_ = MatrixNK::Zero();
-  Eigen::Matrix<Scalar, N, N> l_;
+  Eigen::Matrix<Scalar, N, N> l_ = Eigen::Matrix<Scalar, N, N>::Zero();
   HoldPrediction<N, Scalar> prediction_;  ///< the hold's memory
   static constexpr std::array<int, static_cast<std::size_t>(kTask)> kTaskRows =
       detail::rows_of_kind<M, false, kTask>();
   static constexpr std::array<int, static_cast<std::size_t>(kPhysical)> kPhysicalRows =
       detail::rows_of_kind<M, true, kPhysical>();
   // U_p's leading free_basis_rank_ columns span the directions the physical rows constrain.
-  Eigen::Matrix<Scalar, N, (kPhysical > 0 ? kPhysical : 1)> physical_basis_;
+  Eigen::Matrix<Scalar, N, (kPhysical > 0 ? kPhysical : 1)> physical_basis_ =
+      Eigen::Matrix<Scalar, N, (kPhysical > 0 ? kPhysical : 1)>::Zero();
   int free_basis_rank_ = 0;
   Scalar reach_seen_ = Scalar(0);  ///< the largest reach computed (kVanishingReach)
   /// Rows switched on (physical rows stay true: they are always held).

@@ -113,7 +113,10 @@ struct SolverOptions {
   /// model's own scale, as the run has shown it. sqrt(eps) by default (the same margin as
   /// warn_condition, measured against the run's history instead of the current call); 0 turns it
   /// off. A solver whose first call is already at the vanishing point has no scale to compare
-  /// with: min_singular_value, in the model's units, covers that.
+  /// with: min_singular_value, in the model's units, covers that. The reach compared is the
+  /// diagnostics' sigma_max: exact for kSvd, an upper bound (within sqrt(P)) for the normal
+  /// equations, the largest pivot for kCompleteOrthogonal; with damping it is
+  /// sqrt(sigma^2 + lambda^2), which never vanishes, so the damped strategy never flags.
   Scalar vanishing_ratio = std::sqrt(kEps);
   /// Keep the factorization while A and D are unchanged bit for bit (see the file comment). Only
   /// the cost changes: false factors on every call, as a configuration-dependent A and D do.

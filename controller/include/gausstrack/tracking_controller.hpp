@@ -52,11 +52,12 @@ struct Robust {
   }
 };
 
-/// The ultimate bound the robust term promises on a holonomic row's error (Robust's formula; the
-/// gains at zeta = 1), or infinity when either is off.
+/// The ultimate bound the robust term promises on a holonomic row's error (Robust's formula), in
+/// continuous time, for a task the law meets without saturation; infinity when either is off or
+/// zeta != 1 (then s = e' + omega e does not factor Baumgarte's dynamics and no bound is promised).
 template <typename Scalar>
 Scalar robust_error_bound(const Stabilization<Scalar>& s, const Robust<Scalar>& r) noexcept {
-  if (!s.enabled() || !r.enabled()) return std::numeric_limits<Scalar>::infinity();
+  if (!s.enabled() || !r.enabled() || s.zeta != Scalar(1)) return std::numeric_limits<Scalar>::infinity();
   return r.bound / (s.omega * (s.omega + r.bound / r.layer));
 }
 

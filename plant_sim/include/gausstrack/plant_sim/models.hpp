@@ -86,6 +86,11 @@ class PlantModel {
 /// controller's, not physics, and are not used).
 template <Model M>
 class ModelPlant final : public PlantModel {
+  static_assert(RowLayout<M>::kFirstAcceleration >= 64 ||
+                    (RowLayout<M>::kPhysicalMask >> RowLayout<M>::kFirstAcceleration) == 0,
+                "a plant holds physical rows written as phi or psi (it projects onto their errors); a "
+                "hand-written acceleration-level row has no error the plant could hold");
+
  public:
   using V = Eigen::Matrix<double, M::kDof, 1>;
   explicit ModelPlant(M model) : model_(std::move(model)) {}

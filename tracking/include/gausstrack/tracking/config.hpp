@@ -45,8 +45,8 @@ struct TrackingSpec {
   std::string where;                       ///< where `model` was written
   std::vector<ModelParameter> parameters;  ///< tracking.parameters, then tracking.trajectory
   double zeta = 1, stabilization_omega = 0;
-  /// The robust term (tracking.robust: bound [row units/s^2], layer [row units/s]) for every
-  /// row; bound 0: none.
+  /// The robust term (tracking.robust: bound [row units/s^2] and layer [row units/s], both > 0) for
+  /// every row; robust_bound 0 (no tracking.robust): none.
   double robust_bound = 0, robust_layer = 1;
   InverseStrategy strategy = InverseStrategy::kCholeskyWithFallback;
   /// Actuator limit on every coordinate [N]: no command exceeds it (saturation is reported).
