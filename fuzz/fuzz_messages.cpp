@@ -14,8 +14,8 @@
 
 #include <array>
 #include <cstddef>
-#include <cstring>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <string>
 
@@ -54,9 +54,12 @@ struct Harness {
     ++commands_seen;
     gausstrack::control_command_t msg;
     gn::WireVector<2> force;
-    GAUSSTRACK_FUZZ_CHECK(codec.decode_command(rbuf->data, rbuf->data_size, msg, force) == gn::Refusal::kNone);
+    GAUSSTRACK_FUZZ_CHECK(codec.decode_command(rbuf->data, rbuf->data_size, msg, force) ==
+                          gn::Refusal::kNone);
     GAUSSTRACK_FUZZ_CHECK(force.allFinite());
-    for (int i = 0; i < gn::kMaxDimension; ++i) GAUSSTRACK_FUZZ_CHECK(std::isfinite(msg.force[i]));
+    for (int i = 0; i < gn::kMaxDimension; ++i)
+      GAUSSTRACK_FUZZ_CHECK(std::isfinite(msg.force[i]) && std::isfinite(msg.control[i]));
+    GAUSSTRACK_FUZZ_CHECK(msg.actuators == 0);  // the Duffing pair's law actuates every coordinate
     if (msg.status != 0) GAUSSTRACK_FUZZ_CHECK(force.isZero(0));
   }
   void drain() {
@@ -92,8 +95,13 @@ void codec_case(std::uint8_t dimension, const std::uint8_t* data, std::size_t si
   }
   gausstrack::control_command_t command;
   if (codec.decode_command(data, size, command, force) == gn::Refusal::kNone) {
-    GAUSSTRACK_FUZZ_CHECK(command.dimension == codec.dimension() && force.size() == codec.dimension());
+    GAUSSTRACK_FUZZ_CHECK(command.dimension == codec.dimension() &&
+                          force.size() == codec.dimension());
     GAUSSTRACK_FUZZ_CHECK(force.allFinite());
+    GAUSSTRACK_FUZZ_CHECK(command.actuators >= 0 && command.actuators <= gn::kMaxDimension);
+    if (command.status == 0)
+      for (int i = 0; i < command.actuators; ++i)
+        GAUSSTRACK_FUZZ_CHECK(std::isfinite(command.control[i]));
   }
 }
 
@@ -108,7 +116,8 @@ std::size_t next_length(FuzzInput& in) {
 // With the pair's key: each datagram is sealed with it or not, as its flag byte says.
 void controller_case(FuzzInput& in, bool authenticated) {
   Harness& h = harness();
-  gn::ControllerNode<Duffing> node(gausstrack::TrackingController<Duffing>{}, h.commands, nullptr, 16);
+  gn::ControllerNode<Duffing> node(gausstrack::TrackingController<Duffing>{}, h.commands, nullptr,
+                                   16);
   const gn::MessageKey key(std::array<std::uint8_t, gn::kKeyBytes>{7});
   gn::ChannelAuth open(key, "STATE"), seal(key, "STATE");
   if (authenticated) node.authenticate(open);
@@ -133,7 +142,8 @@ void controller_case(FuzzInput& in, bool authenticated) {
   h.drain();
   const gn::ControllerCounts& c = node.counts();
   GAUSSTRACK_FUZZ_CHECK(c.served + c.repeated + c.rejected == datagrams);
-  GAUSSTRACK_FUZZ_CHECK(c.rejected == c.malformed + c.wrong_dimension + c.non_finite + c.stale + c.auth.total());
+  GAUSSTRACK_FUZZ_CHECK(c.rejected ==
+                        c.malformed + c.wrong_dimension + c.non_finite + c.stale + c.auth.total());
   if (!authenticated) GAUSSTRACK_FUZZ_CHECK(c.auth.total() == 0);
   GAUSSTRACK_FUZZ_CHECK(h.commands_seen - before == c.served + c.repeated);
 }
@@ -158,9 +168,10 @@ void plant_case(FuzzInput& in, bool authenticated) {
   const gn::PlantCounts& c = node.counts();
   // No state was published, so no command can be kept: each one is refused for a stated reason.
   GAUSSTRACK_FUZZ_CHECK(c.rejected == datagrams);
-  GAUSSTRACK_FUZZ_CHECK(c.rejected ==
-                        c.malformed + c.wrong_dimension + c.non_finite + c.stale + c.other_run + c.auth.total());
-  GAUSSTRACK_FUZZ_CHECK(open.last_accepted() == 0);  // nothing the fuzzer writes carries the key's tag
+  GAUSSTRACK_FUZZ_CHECK(c.rejected == c.malformed + c.wrong_dimension + c.non_finite + c.stale +
+                                          c.other_run + c.auth.total());
+  GAUSSTRACK_FUZZ_CHECK(open.last_accepted() ==
+                        0);  // nothing the fuzzer writes carries the key's tag
   GAUSSTRACK_FUZZ_CHECK(c.commands_applied == 0);
 }
 
@@ -172,12 +183,19 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::uint8_t* rest = in.rest();
   const std::size_t rest_size = in.rest_size();
   switch (selector % 8) {
-    case 0: decode_generated<gausstrack::plant_state_t>(rest, rest_size); break;
-    case 1: decode_generated<gausstrack::control_command_t>(rest, rest_size); break;
-    case 2: decode_generated<gausstrack::control_diagnostics_t>(rest, rest_size); break;
+    case 0:
+      decode_generated<gausstrack::plant_state_t>(rest, rest_size);
+      break;
+    case 1:
+      decode_generated<gausstrack::control_command_t>(rest, rest_size);
+      break;
+    case 2:
+      decode_generated<gausstrack::control_diagnostics_t>(rest, rest_size);
+      break;
     case 3: {
       gausstrack::loop_stats_t stats;
-      if (gn::decode_loop_stats(rest, rest_size, stats)) GAUSSTRACK_FUZZ_CHECK(stats.getEncodedSize() == static_cast<int>(rest_size));
+      if (gn::decode_loop_stats(rest, rest_size, stats))
+        GAUSSTRACK_FUZZ_CHECK(stats.getEncodedSize() == static_cast<int>(rest_size));
       break;
     }
     case 4: {
@@ -185,9 +203,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       codec_case(dimension, in.rest(), in.rest_size());
       break;
     }
-    case 5: controller_case(in, false); break;
-    case 6: controller_case(in, true); break;
-    default: plant_case(in, (selector & 8) != 0); break;
+    case 5:
+      controller_case(in, false);
+      break;
+    case 6:
+      controller_case(in, true);
+      break;
+    default:
+      plant_case(in, (selector & 8) != 0);
+      break;
   }
   return 0;
 }

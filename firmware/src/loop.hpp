@@ -9,6 +9,10 @@
 //   kClosedForm  the hand-derived Duffing force (bench/controller/duffing_closed_form.hpp), the floor
 //   kDuffingHeld, kArmHeld  the same laws with the sampled-data hold of one period (the force held
 //                over the period is the law's at its middle: docs/sampled_law.md)
+//   kCartPole    ActuatedController<CartPole>: one motor on the cart, the pendulum's angle tracking
+//                0.4 sin(3 t), 2 x 1 with K = 1 (docs/actuation.md)
+//   kArmPassiveWrist  ActuatedController<PlanarArmPassiveWrist>: the arm's hand on its circle with
+//                motors at the shoulder and the elbow alone, 3 x 2 with K = 2
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -16,19 +20,39 @@
 #include <type_traits>
 
 #include "../../bench/controller/duffing_closed_form.hpp"
+#include "gausstrack/actuation.hpp"
 #include "gausstrack/consistent_state.hpp"
+#include "gausstrack/systems/cart_pole.hpp"
 #include "gausstrack/systems/coupled_duffing.hpp"
 #include "gausstrack/systems/planar_arm.hpp"
 #include "gausstrack/tracking_controller.hpp"
 
 namespace firmware {
 
-enum class Law { kDuffing, kArm, kClosedForm, kDuffingHeld, kArmHeld };
+enum class Law { kDuffing, kArm, kClosedForm, kDuffingHeld, kArmHeld, kCartPole, kArmPassiveWrist };
 
 template <Law L>
 constexpr bool is_arm() {
-  return L == Law::kArm || L == Law::kArmHeld;
+  return L == Law::kArm || L == Law::kArmHeld || L == Law::kArmPassiveWrist;
 }
+
+// The model each law controls (and its plant).
+template <Law L, typename S>
+struct ModelOf {
+  using type = gausstrack::systems::CoupledDuffing<S>;
+};
+template <Law L, typename S>
+requires(L == Law::kArm || L == Law::kArmHeld) struct ModelOf<L, S> {
+  using type = gausstrack::systems::PlanarArm<S>;
+};
+template <typename S>
+struct ModelOf<Law::kArmPassiveWrist, S> {
+  using type = gausstrack::systems::PlanarArmPassiveWrist<S>;
+};
+template <typename S>
+struct ModelOf<Law::kCartPole, S> {
+  using type = gausstrack::systems::CartPole<S>;
+};
 
 inline constexpr int kPeriods = 10000;  // 10 s at 1 kHz
 inline constexpr double kPeriod = 1e-3;  // [s]
@@ -44,14 +68,16 @@ class Loop {
  public:
   static constexpr int N = dof<L>();
   using Vector = Eigen::Matrix<S, N, 1>;
-  using Model = std::conditional_t<is_arm<L>(), gausstrack::systems::PlanarArm<S>,
-                                   gausstrack::systems::CoupledDuffing<S>>;
+  using Model = typename ModelOf<L, S>::type;
 
   Loop() {
     if constexpr (is_arm<L>()) {
       q_ << S(0.2), S(0.9), S(0.6);
       qd_.setZero();
       gausstrack::make_consistent(model_, q_, qd_, S(0), S(1e-6));
+    } else if constexpr (L == Law::kCartPole) {
+      q_ << S(0), S(0);  // on the trajectory: theta = 0, theta' = 1.2
+      qd_ << S(0), S(1.2);
     } else {
       q_ << S(1), S(1);
       qd_ << model_.consistent_x1_velocity(S(2)), S(2);
@@ -104,8 +130,8 @@ class Loop {
       if constexpr (L == Law::kDuffingHeld || L == Law::kArmHeld) o.hold = {S(kPeriod), S(0)};
       return o;
     }
-    gausstrack::TrackingController<Model> controller{Model{}, options()};
-    typename gausstrack::TrackingController<Model>::Output out{};
+    gausstrack::LawFor<Model> controller{Model{}, options()};  // ActuatedController with actuators
+    typename gausstrack::LawFor<Model>::Output out{};
   };
   struct NoLaw {};
   // The plant's own dynamics: A q'' + f = Q + u (the same model as the law's: no mismatch, so the
@@ -113,7 +139,7 @@ class Loop {
   void acceleration(const Vector& q, const Vector& qd, const Vector& u, S t, Vector& qdd) {
     model_.evaluate(q, qd, t, terms_);
     const Vector rhs = terms_.applied_force + u - terms_.nonlinear_force;
-    if constexpr (is_arm<L>()) {
+    if constexpr (is_arm<L>() || L == Law::kCartPole) {
       qdd = terms_.mass_matrix.llt().solve(rhs);
     } else {
       qdd = rhs.cwiseQuotient(terms_.mass_matrix.diagonal());

@@ -4,26 +4,45 @@
 # period is accounted for (a fresh command applied or a missing one counted), nothing is
 # rejected, and the tracking error stays below BOUND while commands keep coming (no watchdog
 # trip) and is back below it at the end in any case.
+# A run that misses the bound while the machine stalled the plant (a wake-up more than 10 ms
+# past its deadline: a virtual machine's host taking its CPU; nothing in the loop delays the
+# plant's own wake-ups) runs once more and says so, as the fault campaign does; a product fault
+# shows in both runs.
 # usage: realtime_scene.sh BIN_DIR SCENE WORK_DIR BOUND [--set key=value ...]
 set -euo pipefail
 bin=$1 scene=$2 work=$3 bound=$4
 shift 4
-rm -rf "$work" && mkdir -p "$work"
-"$bin/gausstrack-run" "$scene" --rate 1000 --duration 2 --out "$work/run" --channel-prefix "RT$$" --realtime \
-  --no-plots "$@" > "$work/run.log"
-/usr/bin/python3 - "$work/run/summary.json" "$work/run/trajectory.csv" "$bound" <<'PY'
+
+run_once() {
+  rm -rf "$work" && mkdir -p "$work"
+  "$bin/gausstrack-run" "$scene" --rate 1000 --duration 2 --out "$work/run" --channel-prefix "RT$$" --realtime \
+    --no-plots "$@" > "$work/run.log"
+  /usr/bin/python3 - "$work/run/summary.json" "$work/run/trajectory.csv" "$bound" <<'PY'
 import csv, json, sys
 s = json.load(open(sys.argv[1]))
 rows = list(csv.DictReader(open(sys.argv[2])))
 bound = float(sys.argv[3])
+late_ms = ((s.get("wake_late_us") or {}).get("max", 0.0)) / 1e3
 print({k: s[k] for k in ("max_tracking_error", "rms_tracking_error", "states_published", "commands_applied",
-                         "commands_missing", "commands_failed", "deadline_misses", "watchdog_trips")})
+                         "commands_missing", "commands_failed", "deadline_misses", "watchdog_trips")},
+      f"latest wake {late_ms:.1f} ms")
 assert s["mode"] == "realtime" and s["completed"], s
 assert s["states_published"] == 2000, s["states_published"]
 assert s["commands_applied"] + s["commands_missing"] == s["states_published"]
 assert s["messages_rejected"] == 0 and s["commands_failed"] == 0
-if s["watchdog_trips"] == 0:
-    assert s["max_tracking_error"] < bound, s["max_tracking_error"]
 final = abs(float(rows[-1]["tracking_error"]))
-assert final < bound, final
+bound_met = (s["watchdog_trips"] > 0 or s["max_tracking_error"] < bound) and final < bound
+if not bound_met:
+    print(f"tracking error {s['max_tracking_error']:.3g} (final {final:.3g}) above {bound}")
+    sys.exit(3 if late_ms > 10.0 else 1)  # 3: the machine stalled the plant
 PY
+}
+
+status=0
+run_once "$@" || status=$?
+if [ "$status" -eq 3 ]; then
+  echo "run again: the machine stalled the plant more than 10 ms in the first run"
+  status=0
+  run_once "$@" || status=$?
+fi
+[ "$status" -eq 0 ] || { echo "FAIL"; exit 1; }

@@ -60,6 +60,8 @@ TEST(Messages, ControlCommandRoundTrips) {
   c.status = 0;
   c.warnings = 8;
   c.compute_ns = 150;
+  c.actuators = 1;
+  c.control[0] = -42.4;
   std::array<std::uint8_t, 2048> buf{};
   const int size = c.getEncodedSize();
   ASSERT_EQ(c.encode(buf.data(), 0, size), size);
@@ -69,6 +71,8 @@ TEST(Messages, ControlCommandRoundTrips) {
   EXPECT_EQ(d.force[1], 42.4);
   EXPECT_EQ(d.run_id, 0x1234567890LL);
   EXPECT_EQ(d.warnings, 8);
+  EXPECT_EQ(d.actuators, 1);
+  EXPECT_EQ(d.control[0], -42.4);
 }
 
 TEST(Messages, TruncatedForeignAndRandomBytesAreRefused) {
@@ -77,7 +81,8 @@ TEST(Messages, TruncatedForeignAndRandomBytesAreRefused) {
   const int size = s.getEncodedSize();
   ASSERT_EQ(s.encode(buf.data(), 0, size), size);
   gausstrack::plant_state_t d{};
-  for (int cut : {0, 4, 8, 20, size - 1}) EXPECT_LT(d.decode(buf.data(), 0, cut), 0) << "cut at " << cut;
+  for (int cut : {0, 4, 8, 20, size - 1})
+    EXPECT_LT(d.decode(buf.data(), 0, cut), 0) << "cut at " << cut;
   // A plant state read as a control command: the type fingerprint differs.
   gausstrack::control_command_t c{};
   EXPECT_LT(c.decode(buf.data(), 0, size), 0);

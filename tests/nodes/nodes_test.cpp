@@ -18,6 +18,7 @@
 #include "gausstrack/nodes/controller_node.hpp"
 #include "gausstrack/nodes/plant_node.hpp"
 #include "gausstrack/plant_sim/models.hpp"
+#include "gausstrack/systems/cart_pole.hpp"
 #include "gausstrack/systems/coupled_duffing.hpp"
 
 namespace gausstrack::nodes {
@@ -26,8 +27,9 @@ namespace {
 using Duffing = systems::CoupledDuffing<double>;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-std::vector<std::uint8_t> encode_state(int dimension, std::int64_t run_id, std::int64_t sequence, double t,
-                                       const std::vector<double>& q, const std::vector<double>& qd) {
+std::vector<std::uint8_t> encode_state(int dimension, std::int64_t run_id, std::int64_t sequence,
+                                       double t, const std::vector<double>& q,
+                                       const std::vector<double>& qd) {
   plant_state_t s{};
   s.run_id = run_id;
   s.sequence = sequence;
@@ -54,28 +56,36 @@ void round_trip_fixed(std::mt19937_64& rng) {
   s.sequence = 9;
   const int size = codec.encode_state(s, q, qd, buf.data(), buf.size());
   ASSERT_GT(size, 0);
-  ASSERT_EQ(codec.decode_state(buf.data(), static_cast<std::size_t>(size), d, q2, qd2), Refusal::kNone) << N;
+  ASSERT_EQ(codec.decode_state(buf.data(), static_cast<std::size_t>(size), d, q2, qd2),
+            Refusal::kNone)
+      << N;
   EXPECT_EQ(q2, q) << N;
   EXPECT_EQ(qd2, qd) << N;
   for (int i = N; i < kMaxDimension; ++i) EXPECT_EQ(d.q[i], 0.0);
   // Another receiver's dimension, a truncated message, a NaN: each refused with its reason.
   Codec<Eigen::Dynamic> other(N == kMaxDimension ? N - 1 : N + 1);
   typename Codec<Eigen::Dynamic>::Vector oq, oqd;
-  EXPECT_EQ(other.decode_state(buf.data(), static_cast<std::size_t>(size), d, oq, oqd), Refusal::kDimension);
-  EXPECT_EQ(codec.decode_state(buf.data(), static_cast<std::size_t>(size - 1), d, q2, qd2), Refusal::kMalformed);
+  EXPECT_EQ(other.decode_state(buf.data(), static_cast<std::size_t>(size), d, oq, oqd),
+            Refusal::kDimension);
+  EXPECT_EQ(codec.decode_state(buf.data(), static_cast<std::size_t>(size - 1), d, q2, qd2),
+            Refusal::kMalformed);
   q(N - 1) = kNaN;
   const int nan_size = codec.encode_state(s, q, qd, buf.data(), buf.size());
-  EXPECT_EQ(codec.decode_state(buf.data(), static_cast<std::size_t>(nan_size), d, q2, qd2), Refusal::kNonFinite);
+  EXPECT_EQ(codec.decode_state(buf.data(), static_cast<std::size_t>(nan_size), d, q2, qd2),
+            Refusal::kNonFinite);
 
   control_command_t c{}, e{};
   const int csize = codec.encode_command(c, f, buf.data(), buf.size());
   ASSERT_GT(csize, 0);
-  ASSERT_EQ(codec.decode_command(buf.data(), static_cast<std::size_t>(csize), e, f2), Refusal::kNone);
+  ASSERT_EQ(codec.decode_command(buf.data(), static_cast<std::size_t>(csize), e, f2),
+            Refusal::kNone);
   EXPECT_EQ(f2, f);
-  EXPECT_EQ(other.decode_command(buf.data(), static_cast<std::size_t>(csize), e, oq), Refusal::kDimension);
+  EXPECT_EQ(other.decode_command(buf.data(), static_cast<std::size_t>(csize), e, oq),
+            Refusal::kDimension);
   // A state's bytes are not a command (the type fingerprint differs).
   ASSERT_EQ(codec.encode_state(s, q2, qd2, buf.data(), buf.size()), size);
-  EXPECT_EQ(codec.decode_command(buf.data(), static_cast<std::size_t>(size), e, f2), Refusal::kMalformed);
+  EXPECT_EQ(codec.decode_command(buf.data(), static_cast<std::size_t>(size), e, f2),
+            Refusal::kMalformed);
 }
 
 template <int... N>
@@ -101,7 +111,8 @@ TEST(Codec, LoopStatsDecoderRefusesBadStringLengths) {
   ASSERT_TRUE(decode_loop_stats(buf.data(), buf.size(), d));
   EXPECT_EQ(d.process, "controller");
   EXPECT_EQ(d.commands_published, 1234);
-  for (std::size_t n = 0; n < buf.size(); ++n) EXPECT_FALSE(decode_loop_stats(buf.data(), n, d)) << n;
+  for (std::size_t n = 0; n < buf.size(); ++n)
+    EXPECT_FALSE(decode_loop_stats(buf.data(), n, d)) << n;
   // The string's length field: bytes 16..19, big-endian, 11 here ("controller" and its '\0').
   ASSERT_EQ(buf[19], 11);
   for (const std::int32_t bad : {0, -1, -100, INT32_MIN, 1 << 20}) {
@@ -111,6 +122,57 @@ TEST(Codec, LoopStatsDecoderRefusesBadStringLengths) {
     b[18] = static_cast<std::uint8_t>(u >> 8), b[19] = static_cast<std::uint8_t>(u);
     EXPECT_FALSE(decode_loop_stats(b.data(), b.size(), d)) << bad;
   }
+}
+
+// An actuated law's command carries u beside B u; the count and the commands are validated as
+// the force is.
+TEST(Codec, ActuatorCommandsRoundTripAndAreValidated) {
+  Codec<3> codec;
+  const Eigen::Vector3d force(1.0, -2.0, 0.5);
+  const Eigen::Vector2d u(4.0, -0.25);
+  std::array<std::uint8_t, kMessageBufferBytes> buf{};
+  control_command_t c{}, e{};
+  Eigen::Vector3d f2;
+  int size = codec.encode_command(c, force, u, buf.data(), buf.size());
+  ASSERT_GT(size, 0);
+  ASSERT_EQ(codec.decode_command(buf.data(), static_cast<std::size_t>(size), e, f2),
+            Refusal::kNone);
+  EXPECT_EQ(f2, force);
+  EXPECT_EQ(e.actuators, 2);
+  EXPECT_EQ(e.control[0], 4.0);
+  EXPECT_EQ(e.control[1], -0.25);
+  for (int i = 2; i < kMaxDimension; ++i) EXPECT_EQ(e.control[i], 0.0);
+  // The force alone: no actuator commands.
+  size = codec.encode_command(c, force, buf.data(), buf.size());
+  ASSERT_EQ(codec.decode_command(buf.data(), static_cast<std::size_t>(size), e, f2),
+            Refusal::kNone);
+  EXPECT_EQ(e.actuators, 0);
+  // A NaN command of a successful solve is refused; of a failed one (status not 0) it is ignored.
+  const Eigen::Vector2d bad(kNaN, 1.0);
+  c.status = 0;
+  size = codec.encode_command(c, force, bad, buf.data(), buf.size());
+  EXPECT_EQ(codec.decode_command(buf.data(), static_cast<std::size_t>(size), e, f2),
+            Refusal::kNonFinite);
+  c.status = 3;
+  size = codec.encode_command(c, force, bad, buf.data(), buf.size());
+  EXPECT_EQ(codec.decode_command(buf.data(), static_cast<std::size_t>(size), e, f2),
+            Refusal::kNone);
+  EXPECT_TRUE(f2.isZero(0));
+  // A count out of range, written past the codec, is malformed.
+  for (const std::int32_t count : {-1, kMaxDimension + 1}) {
+    control_command_t raw{};
+    raw.dimension = 3;
+    raw.actuators = count;
+    const int n = raw.encode(buf.data(), 0, raw.getEncodedSize());
+    ASSERT_GT(n, 0);
+    EXPECT_EQ(codec.decode_command(buf.data(), static_cast<std::size_t>(n), e, f2),
+              Refusal::kMalformed)
+        << count;
+  }
+  // More commands than the message holds are not encoded.
+  const Eigen::Matrix<double, kMaxDimension + 1, 1> many =
+      Eigen::Matrix<double, kMaxDimension + 1, 1>::Ones();
+  EXPECT_EQ(codec.encode_command(c, force, many, buf.data(), buf.size()), -1);
 }
 
 TEST(Codec, RunTimeDimensionRoundTripsAndRejectsOutOfRangeDimensions) {
@@ -124,7 +186,8 @@ TEST(Codec, RunTimeDimensionRoundTripsAndRejectsOutOfRangeDimensions) {
     std::array<std::uint8_t, kMessageBufferBytes> buf{};
     plant_state_t s{}, d{};
     const int size = codec.encode_state(s, q, qd, buf.data(), buf.size());
-    ASSERT_EQ(codec.decode_state(buf.data(), static_cast<std::size_t>(size), d, q2, qd2), Refusal::kNone);
+    ASSERT_EQ(codec.decode_state(buf.data(), static_cast<std::size_t>(size), d, q2, qd2),
+              Refusal::kNone);
     EXPECT_EQ(q2, q);
     EXPECT_EQ(qd2, qd);
   }
@@ -157,7 +220,8 @@ plant_sim::TrackingSpec duffing_spec() {
 
 // Eq. (32) for the Duffing oscillator written out by hand (not through the library's solver):
 // D = [1, -1], g = s''(t), A = diag(m1, m2), a = A^-1 (Q - f), Q' = A D^T (g - D a) / (D A^-1 D^T).
-Eigen::Vector2d duffing_force_by_hand(const Duffing& m, const Eigen::Vector2d& q, const Eigen::Vector2d& qd, double t) {
+Eigen::Vector2d duffing_force_by_hand(const Duffing& m, const Eigen::Vector2d& q,
+                                      const Eigen::Vector2d& qd, double t) {
   const Eigen::Vector2d f = m.spring_damper_force(q, qd);
   const Eigen::Vector2d a(-f(0) / m.m1, -f(1) / m.m2);
   const double lambda = (m.trajectory.acceleration(t) - (a(0) - a(1))) / (1 / m.m1 + 1 / m.m2);
@@ -181,6 +245,38 @@ struct ControllerFixture : ::testing::Test {
     }
   }
 };
+
+// The cart-pole's controller node (one actuator on the cart): its commands carry u, and the force
+// is B u = (u, 0), the law's at the state.
+TEST(ControllerNodeActuated, TheCommandCarriesTheActuatorCommands) {
+  using CartPole = systems::CartPole<double>;
+  lcm::LCM lcm{"memq://"};
+  ASSERT_TRUE(lcm.good());
+  Outbox commands{lcm, "CMD", nullptr, false};
+  ControllerNode<CartPole> node{ActuatedController<CartPole>{}, commands};
+  Collector out;
+  lcm.subscribe("CMD", &Collector::on, &out);
+  lcm.subscribe("STATE", &ControllerNode<CartPole>::on_state, &node);
+  ActuatedController<CartPole> law;
+  ActuatedController<CartPole>::Output expected;
+  for (int k = 0; k < 5; ++k) {
+    const Eigen::Vector2d q(0.1 * k, 0.2 - 0.05 * k), qd(0.3, -0.1 * k);
+    const double t = 0.01 * k;
+    const auto bytes = encode_state(2, 7, k, t, {q(0), q(1)}, {qd(0), qd(1)});
+    lcm.publish("STATE", bytes.data(), static_cast<unsigned>(bytes.size()));
+    while (lcm.handleTimeout(0) > 0) {
+    }
+    ASSERT_EQ(out.commands.size(), static_cast<std::size_t>(k + 1));
+    ASSERT_EQ(law.compute(q, qd, t, expected), Status::kOk);
+    const control_command_t& c = out.commands.back();
+    EXPECT_EQ(c.status, 0);
+    EXPECT_EQ(c.actuators, 1);
+    EXPECT_EQ(c.control[0], expected.control(0));
+    EXPECT_EQ(c.force[0], c.control[0]);  // B = (1, 0)
+    EXPECT_EQ(c.force[1], 0.0);
+    EXPECT_NE(c.control[0], 0.0);
+  }
+}
 
 TEST_F(ControllerFixture, AnswersEachStateWithTheLawsForce) {
   Duffing m;
@@ -207,15 +303,15 @@ TEST_F(ControllerFixture, AnswersEachStateWithTheLawsForce) {
 }
 
 TEST_F(ControllerFixture, RefusesBadStatesWithTheirReasonAndAnswersNothing) {
-  send(encode_state(3, 1, 0, 0.0, {0, 0, 0}, {0, 0, 0}));          // dimension
-  send(encode_state(2, 1, 1, 0.0, {kNaN, 0}, {0, 0}));               // NaN
+  send(encode_state(3, 1, 0, 0.0, {0, 0, 0}, {0, 0, 0}));  // dimension
+  send(encode_state(2, 1, 1, 0.0, {kNaN, 0}, {0, 0}));     // NaN
   send(encode_state(2, 1, 2, std::numeric_limits<double>::infinity(), {0, 0}, {0, 0}));  // t
   auto bytes = encode_state(2, 1, 3, 0.0, {0, 0}, {0, 0});
-  bytes.resize(bytes.size() / 2);                                    // truncated
+  bytes.resize(bytes.size() / 2);  // truncated
   send(bytes);
-  send(encode_state(2, 1, 4, 0.0, {0.1, 0}, {0, 0}));                // served
-  send(encode_state(2, 1, 3, 0.0, {0.1, 0}, {0, 0}));                // older sequence
-  send(encode_state(2, 1, -1, 0.0, {0.1, 0}, {0, 0}));               // negative sequence
+  send(encode_state(2, 1, 4, 0.0, {0.1, 0}, {0, 0}));   // served
+  send(encode_state(2, 1, 3, 0.0, {0.1, 0}, {0, 0}));   // older sequence
+  send(encode_state(2, 1, -1, 0.0, {0.1, 0}, {0, 0}));  // negative sequence
   const ControllerCounts& c = node.counts();
   EXPECT_EQ(c.wrong_dimension, 1);
   EXPECT_EQ(c.non_finite, 2);
@@ -278,7 +374,8 @@ TEST_F(ControllerFixture, RestartedPlantIsANewRunNotStaleStates) {
 
 TEST_F(ControllerFixture, DiagnosticsTravelApartAndAddUpToTheForce) {
   Outbox diag_out(lcm, "DIAG", nullptr, false);
-  ControllerNode<Duffing> with_diag(plant_sim::make_controller<Duffing>(duffing_spec()), commands, &diag_out);
+  ControllerNode<Duffing> with_diag(plant_sim::make_controller<Duffing>(duffing_spec()), commands,
+                                    &diag_out);
   std::vector<control_diagnostics_t> diags;
   struct DiagCollector {
     std::vector<control_diagnostics_t>* d;
@@ -296,12 +393,13 @@ TEST_F(ControllerFixture, DiagnosticsTravelApartAndAddUpToTheForce) {
   ASSERT_EQ(diags.size(), 1u);
   ASSERT_EQ(out.commands.size(), 1u);
   for (int i = 0; i < 2; ++i)
-    EXPECT_NEAR(diags[0].closed_loop[i] + diags[0].feedforward[i] + diags[0].stabilizing[i], out.commands[0].force[i],
-                1e-12 * (1 + std::abs(out.commands[0].force[i])));
+    EXPECT_NEAR(diags[0].closed_loop[i] + diags[0].feedforward[i] + diags[0].stabilizing[i],
+                out.commands[0].force[i], 1e-12 * (1 + std::abs(out.commands[0].force[i])));
   EXPECT_EQ(diags[0].state_sequence, 0);
   EXPECT_EQ(diags[0].rank, 1);
-  // A command carries one array of 32 doubles (the force), not the parts as well.
-  EXPECT_LT(control_command_t{}.getEncodedSize(), 2 * 32 * 8);
+  // A command carries two arrays of 32 doubles (the force and the actuator commands), not the
+  // force's three parts as well.
+  EXPECT_LT(control_command_t{}.getEncodedSize(), 3 * 32 * 8);
 }
 
 // With the pair's key the controller answers only states that verify, and seals its commands;
@@ -309,7 +407,8 @@ TEST_F(ControllerFixture, DiagnosticsTravelApartAndAddUpToTheForce) {
 TEST(AuthenticatedController, AnswersOnlyVerifiedStatesAndSealsItsCommands) {
   lcm::LCM lcm{"memq://"};
   ASSERT_TRUE(lcm.good());
-  const MessageKey key(std::array<std::uint8_t, kKeyBytes>{1, 2, 3}), other(std::array<std::uint8_t, kKeyBytes>{9});
+  const MessageKey key(std::array<std::uint8_t, kKeyBytes>{1, 2, 3}),
+      other(std::array<std::uint8_t, kKeyBytes>{9});
   ChannelAuth seal_commands(key, "CMD"), open_states(key, "STATE");
   Outbox commands{lcm, "CMD", nullptr, false, &seal_commands};
   ControllerNode<Duffing> node{plant_sim::make_controller<Duffing>(duffing_spec()), commands};
@@ -320,7 +419,8 @@ TEST(AuthenticatedController, AnswersOnlyVerifiedStatesAndSealsItsCommands) {
     long refused = 0;
     void on(const lcm::ReceiveBuffer* rbuf, const std::string&) {
       std::size_t size = 0;
-      if (open.open(rbuf->data, rbuf->data_size, size) != AuthRefusal::kNone) return void(++refused);
+      if (open.open(rbuf->data, rbuf->data_size, size) != AuthRefusal::kNone)
+        return void(++refused);
       control_command_t c{};
       ASSERT_EQ(c.decode(rbuf->data, 0, static_cast<int>(size)), static_cast<int>(size));
       commands.push_back(c);
@@ -344,7 +444,7 @@ TEST(AuthenticatedController, AnswersOnlyVerifiedStatesAndSealsItsCommands) {
   const auto first = sealed(plant, encode_state(2, 9, 0, 0.0, {0.1, 0}, {0, 0}));
   send(first);
   ASSERT_EQ(out.commands.size(), 1u);
-  send(first);                                                      // replayed
+  send(first);                                                           // replayed
   send(sealed(stranger, encode_state(2, 9, 5, 0.0, {0.1, 0}, {0, 0})));  // another key
   send(sealed(plant, encode_state(2, 9, 1, 0.01, {0.2, 0}, {0, 0})));
   ASSERT_EQ(out.commands.size(), 2u);
@@ -444,7 +544,8 @@ TEST_F(PlantFixture, StatesReportTheDelayWithWhichAnswersAreApplied) {
     // In real time the last state's answer comes after the loop.
     ASSERT_GE(delays.size(), 3u);
     for (std::size_t k = 0; k < delays.size(); ++k)
-      EXPECT_EQ(delays[k], k == 0 ? 0 : period) << (lockstep ? "lock-step" : "real time") << ", state " << k;
+      EXPECT_EQ(delays[k], k == 0 ? 0 : period)
+          << (lockstep ? "lock-step" : "real time") << ", state " << k;
   }
 }
 
@@ -497,17 +598,22 @@ TEST(PlantHoldLag, AnswersActAFixedLagAfterTheirStates) {
     if (p == 33) answer(30, now + kPeriod / 2);
   }
   // Period 1 knew no round trip yet (L = 1; state 0 went unanswered); from period 2 on L = 3.
-  for (int p = 0; p < 4; ++p) EXPECT_EQ(applied[static_cast<std::size_t>(p)], 0.0) << "period " << p;
-  for (int p = 4; p < 33; ++p) EXPECT_EQ(applied[static_cast<std::size_t>(p)], p - 3) << "period " << p;
+  for (int p = 0; p < 4; ++p)
+    EXPECT_EQ(applied[static_cast<std::size_t>(p)], 0.0) << "period " << p;
+  for (int p = 4; p < 33; ++p)
+    EXPECT_EQ(applied[static_cast<std::size_t>(p)], p - 3) << "period " << p;
   EXPECT_EQ(applied[33], 29.0);  // the answer due (30) had not come
-  for (int p = 34; p < 37; ++p) EXPECT_EQ(applied[static_cast<std::size_t>(p)], 30.0) << "period " << p;
-  for (int p = 37; p < 40; ++p) EXPECT_EQ(applied[static_cast<std::size_t>(p)], p - 3) << "period " << p;
+  for (int p = 34; p < 37; ++p)
+    EXPECT_EQ(applied[static_cast<std::size_t>(p)], 30.0) << "period " << p;
+  for (int p = 37; p < 40; ++p)
+    EXPECT_EQ(applied[static_cast<std::size_t>(p)], p - 3) << "period " << p;
   EXPECT_EQ(node.counts().commands_late, 1);
   EXPECT_EQ(node.counts().commands_applied, 29 + 1 + 3);
   ASSERT_GE(delays.of_state.size(), 38u);
   EXPECT_EQ(delays.of_state[0], 0);
   EXPECT_EQ(delays.of_state[1], kPeriod);
-  for (std::size_t k = 2; k < delays.of_state.size(); ++k) EXPECT_EQ(delays.of_state[k], 3 * kPeriod) << "state " << k;
+  for (std::size_t k = 2; k < delays.of_state.size(); ++k)
+    EXPECT_EQ(delays.of_state[k], 3 * kPeriod) << "state " << k;
   EXPECT_EQ(node.hold_lag_periods().max(), 3.0);
   // Each period's held answer: on time while period - state == lag.
   const auto& held = node.applied_states().values();
@@ -525,7 +631,8 @@ TEST_F(PlantFixture, EachPeriodTalliesTheWarningsOfTheAnswerItHeld) {
     PlantNode node(lcm, states, "CMD", 2, options(lockstep));
     fake.reply = [](const plant_state_t& s, control_command_t& c) {
       c.force[0] = 1.0;
-      c.warnings = static_cast<std::int32_t>(s.sequence == 1 ? warning::kConstraintsNotMet | warning::kRankDeficient
+      c.warnings = static_cast<std::int32_t>(s.sequence == 1 ? warning::kConstraintsNotMet |
+                                                                   warning::kRankDeficient
                                                              : warning::kSaturated);
       if (s.sequence == 3) c.status = 3, c.warnings = 0;
     };
@@ -539,8 +646,9 @@ TEST_F(PlantFixture, EachPeriodTalliesTheWarningsOfTheAnswerItHeld) {
     EXPECT_EQ(w.calls, 5u) << mode;
     EXPECT_EQ(w.by_kind[1], 1u) << mode;  // constraints not met: state 1
     EXPECT_EQ(w.by_kind[0], 1u) << mode;  // rank deficient: state 1
-    EXPECT_EQ(w.by_kind[5], 3u) << mode;  // saturated: states 0, 2, 4 (lock-step); 0 twice, 2 (real time)
-    EXPECT_EQ(w.failed, 1u) << mode;      // state 3
+    EXPECT_EQ(w.by_kind[5], 3u)
+        << mode;  // saturated: states 0, 2, 4 (lock-step); 0 twice, 2 (real time)
+    EXPECT_EQ(w.failed, 1u) << mode;  // state 3
     EXPECT_EQ(w.rows_not_met, 2u) << mode;
   }
 }
@@ -586,7 +694,9 @@ TEST_F(PlantFixture, RealTimeHoldsTheNewestAnswerAndNeverAFailedOnesPredecessor)
 TEST_F(PlantFixture, RealTimeWatchdogAppliesTheSafeActionThenRecovers) {
   PlantNode node(lcm, states, "CMD", 1, options(false));
   bool answering = true;
-  fake.reply = [&](const plant_state_t&, control_command_t& c) { c.force[0] = answering ? 5.0 : kNaN; };
+  fake.reply = [&](const plant_state_t&, control_command_t& c) {
+    c.force[0] = answering ? 5.0 : kNaN;
+  };
   const std::array<double, 1> q{0}, qd{0};
   std::array<double, 1> u{};
   int k = 0;
@@ -595,7 +705,8 @@ TEST_F(PlantFixture, RealTimeWatchdogAppliesTheSafeActionThenRecovers) {
   answering = false;  // NaN forces are refused: as if the controller were silent
   // Periods of 5 ms go by until the 20 ms watchdog trips (however late the wake-ups).
   const int silent_from = k;
-  for (; !node.watchdog().tripped() && k < silent_from + 400; ++k) ASSERT_TRUE(node.exchange(k, 0, q, qd, u));
+  for (; !node.watchdog().tripped() && k < silent_from + 400; ++k)
+    ASSERT_TRUE(node.exchange(k, 0, q, qd, u));
   EXPECT_GE(k - silent_from, 4);
   EXPECT_EQ(node.watchdog().trips(), 1);
   EXPECT_EQ(u[0], 0.0);
@@ -609,13 +720,19 @@ TEST_F(PlantFixture, RealTimeWatchdogAppliesTheSafeActionThenRecovers) {
 // A rogue process answers every state first, without the key or with a key of its own: nothing of
 // it is applied, the paired controller's answers are.
 TEST_F(PlantFixture, WithAKeyARogueAnswerFirstIsRefusedAndThePairedControllersApplied) {
-  const MessageKey key(std::array<std::uint8_t, kKeyBytes>{4, 2}), own(std::array<std::uint8_t, kKeyBytes>{6});
+  const MessageKey key(std::array<std::uint8_t, kKeyBytes>{4, 2}),
+      own(std::array<std::uint8_t, kKeyBytes>{6});
   ChannelAuth open_commands(key, "CMD"), controller(key, "CMD"), forger(own, "CMD");
   PlantNode node(lcm, states, "CMD", 2, options(true));
   node.authenticate(open_commands);
-  fake.reply = [](const plant_state_t&, control_command_t& c) { c.force[0] = 50.0, c.sequence = 1'000'000'000; };
+  fake.reply = [](const plant_state_t&, control_command_t& c) {
+    c.force[0] = 50.0, c.sequence = 1'000'000'000;
+  };
   FakeController forged{&lcm, fake.reply, 0, &forger};
-  FakeController paired{&lcm, [](const plant_state_t& s, control_command_t& c) { c.force[0] = 1.0 + static_cast<double>(s.sequence); },
+  FakeController paired{&lcm,
+                        [](const plant_state_t& s, control_command_t& c) {
+                          c.force[0] = 1.0 + static_cast<double>(s.sequence);
+                        },
                         0, &controller};
   lcm.subscribe("STATE", &FakeController::on, &forged);
   lcm.subscribe("STATE", &FakeController::on, &paired);
@@ -659,12 +776,12 @@ TEST(HoldLag, FollowsTheRoundTripsPercentileNotItsOutliers) {
   for (int i = 0; i < 100; ++i) lag.record(kPeriod * 3 / 10);
   EXPECT_EQ(lag.lag(), 1);
   for (int i = 0; i < 20; ++i) lag.record(10 * kPeriod);  // a stall's burst: 20 of 121 round trips
-  lag.record(-5);                                           // clocks that disagree count as no delay
+  lag.record(-5);                                         // clocks that disagree count as no delay
   EXPECT_EQ(lag.lag(), 1);
   for (int i = 0; i < 200; ++i) lag.record(kPeriod * 22 / 10);
   EXPECT_EQ(lag.lag(), 3);  // the window: 35 under a period, 20 of 10, 1 negative, 200 of 2.2
   for (int i = 0; i < 70; ++i) lag.record(kPeriod * 5);
-  EXPECT_EQ(lag.lag(), 6);  // now 70 of 256 above 2.2 periods: more than the 25 % allowed
+  EXPECT_EQ(lag.lag(), 6);    // now 70 of 256 above 2.2 periods: more than the 25 % allowed
   HoldLag slow(100'000'000);  // 10 Hz
   slow.record(5'000'000'000);
   EXPECT_EQ(slow.lag(), 10);  // 1 s
@@ -687,10 +804,10 @@ TEST(PeriodScheduler, DeadlinesAreAbsoluteAndLateWakeUpsAreMisses) {
   PeriodScheduler s(1'000'000, 5'000'000, 16);
   EXPECT_EQ(s.deadline(0), 5'000'000);
   EXPECT_EQ(s.deadline(7), 12'000'000);
-  s.record_wake(0, 5'000'100);   // on time
-  s.record_wake(1, 6'499'999);   // just under half a period late
-  s.record_wake(2, 7'500'001);   // a miss
-  s.record_wake(3, 8'000'000);   // the next deadline is not shifted by the miss
+  s.record_wake(0, 5'000'100);  // on time
+  s.record_wake(1, 6'499'999);  // just under half a period late
+  s.record_wake(2, 7'500'001);  // a miss
+  s.record_wake(3, 8'000'000);  // the next deadline is not shifted by the miss
   EXPECT_EQ(s.misses(), 1);
   EXPECT_EQ(s.deadline(3), 8'000'000);
   // A real wait wakes at or after its deadline.

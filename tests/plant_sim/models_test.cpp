@@ -68,6 +68,26 @@ TEST(Models, CartPoleSwingsItsPendulumWithTheCartForceAlone) {
       << "held " << held.summary.max_tracking_error << ", at the measured state " << plain.summary.max_tracking_error;
 }
 
+// The arm with its wrist passive: the plant is the full arm, the law pushes the shoulder and the
+// elbow alone (exactly zero torque at the wrist), the hand follows the circle, and the wrist link
+// swings on its own (the task's zero dynamics: a pendulum hanging from the hand).
+TEST(Models, ArmWithAPassiveWristTracksWithTwoMotors) {
+  const RunResult r = run_scene(load_scene(kScenes + "/planar_arm_passive_wrist.yaml"));
+  ASSERT_TRUE(r.summary.failure.empty()) << r.summary.failure;
+  EXPECT_LT(r.summary.max_tracking_error, 1e-8);
+  EXPECT_EQ(r.summary.control_failures, 0u);
+  EXPECT_EQ(r.summary.warnings.rows_not_met, 0u);
+  double wrist_lo = 1e9, wrist_hi = -1e9, largest = 0;
+  for (const Sample& s : r.samples) {
+    ASSERT_EQ(s.u[2], 0.0) << "t = " << s.t;
+    largest = std::max(largest, std::abs(s.u[0]) + std::abs(s.u[1]));
+    const double wrist = s.q[0] + s.q[1] + s.q[2];  // link 3's absolute angle
+    wrist_lo = std::min(wrist_lo, wrist), wrist_hi = std::max(wrist_hi, wrist);
+  }
+  EXPECT_GT(largest, 1.0);                // the motors hold the arm against gravity
+  EXPECT_GT(wrist_hi - wrist_lo, 1e-3);   // the wrist link moves, unactuated
+}
+
 // The differential drive: drive force and yaw torque only, the ground holding its wheels against
 // side slip (the model's physical row, held by the plant's KKT solve). The look-ahead point
 // converges onto the figure-eight, the wheels never slip, and no command ever pushes sideways.

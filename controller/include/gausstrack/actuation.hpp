@@ -40,8 +40,13 @@
 //   diagonal of R at or below sqrt(eps) times the largest column) make W singular:
 //   Status::kWeightNotPositiveDefinite.
 // - A given weight W = Lw Lw^T (set_weight): U is replaced by L^-1 B Lw^-T and R^-1 by Lw^-T.
-// The task's pseudo-inverse is the one-sided Jacobi SVD of rank_revealing.hpp with the solver
-// options' rank tolerance and singular-value floor (SolverOptions::min_singular_value: with
+// - Without B and with Gauss's weight, W^(1/2) = L^-1: the task matrix is C_c itself and
+//   u = L x, eq. (32) with nothing more to compute.
+// The task's pseudo-inverse: under the default strategy (kCholeskyWithFallback) its normal
+// equations T^T (T T^T)^-1 when every task row is active and the Cholesky factor of T T^T shows T
+// of full row rank, well conditioned and above the floor, as the plain law answers eq. (32);
+// otherwise the one-sided Jacobi SVD of rank_revealing.hpp with the solver options' rank
+// tolerance and singular-value floor (SolverOptions::min_singular_value: with
 // Gauss's weight the singular values are those of D_c A^(-1/2) restricted to the actuated,
 // physically free directions, in the same units). Fixed-size storage: allocation-free and
 // exception-free after construction.
@@ -63,12 +68,13 @@
 namespace gausstrack {
 
 template <typename M>
-concept ActuatedModel =
-    Model<M> && requires(const M& m, const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& q, typename M::Scalar t,
-                         Eigen::Matrix<typename M::Scalar, M::kDof, M::kActuators>& b) {
-      requires M::kActuators >= 1;
-      { m.actuation(q, t, b) } noexcept;
-    };
+concept ActuatedModel = Model<M> &&
+    requires(const M& m, const Eigen::Matrix<typename M::Scalar, M::kDof, 1>& q,
+             typename M::Scalar t, Eigen::Matrix<typename M::Scalar, M::kDof, M::kActuators>& b) {
+  requires M::kActuators >= 1;
+  { m.actuation(q, t, b) }
+  noexcept;
+};
 
 namespace detail {
 template <typename M>
@@ -122,8 +128,10 @@ struct ActuatedOutput {
 /// The actuated law for a model with actuators or physical rows (or any model, through B = I): one
 /// evaluation of the model's terms and of B, Baumgarte's correction per task row, one SVD of the
 /// physical rows (when there are any), an orthonormal basis of B's scaled directions (Gauss's
-/// weight) and one SVD of the scaled task matrix. The solver options' strategy is not used (the
-/// task matrix is always factored by the SVD); its tolerances are.
+/// weight; none without B) and the pseudo-inverse of the scaled task matrix: its normal equations
+/// under the default strategy when every task row is active and the task is of full row rank and
+/// well conditioned (the fallback_rcond, rank_tolerance and min_singular_value tests), one SVD
+/// otherwise and under every other strategy.
 template <Model M>
 class ActuatedController {
  public:
@@ -153,7 +161,8 @@ class ActuatedController {
   /// The robust term of one task row, as TrackingController::set_robust (false for a physical
   /// row).
   bool set_robust(int row, const Robust<Scalar>& robust) noexcept {
-    if (row < 0 || row >= P || RowLayout<M>::physical(row) || robust.validate() != nullptr) return false;
+    if (row < 0 || row >= P || RowLayout<M>::physical(row) || robust.validate() != nullptr)
+      return false;
     row_robust_[static_cast<std::size_t>(row)] = robust;
     return true;
   }
@@ -188,14 +197,16 @@ class ActuatedController {
     return true;
   }
   bool row_active(int row) const noexcept {
-    return row >= 0 && row < P && !RowLayout<M>::physical(row) && active_[static_cast<std::size_t>(row)];
+    return row >= 0 && row < P && !RowLayout<M>::physical(row) &&
+           active_[static_cast<std::size_t>(row)];
   }
 
   /// The weight W of the cost u^T W u (symmetric positive definite; only its lower triangle is
   /// read). Returns false, changing nothing, otherwise.
   bool set_weight(const MatrixKK& w) noexcept {
     MatrixKK factor = w;
-    if (!w.allFinite() || !small_dense::cholesky_in_place(factor) || !factor.allFinite()) return false;
+    if (!w.allFinite() || !small_dense::cholesky_in_place(factor) || !factor.allFinite())
+      return false;
     weight_factor_ = factor.template triangularView<Eigen::Lower>();
     gauss_weight_ = false;
     return true;
@@ -204,12 +215,15 @@ class ActuatedController {
   void use_gauss_weight() noexcept { gauss_weight_ = true; }
   /// The robust term of one row (off for a row out of range or a physical row).
   Robust<Scalar> robust(int row) const noexcept {
-    return row < 0 || row >= P || RowLayout<M>::physical(row) ? Robust<Scalar>{} : row_robust_[static_cast<std::size_t>(row)];
+    return row < 0 || row >= P || RowLayout<M>::physical(row)
+               ? Robust<Scalar>{}
+               : row_robust_[static_cast<std::size_t>(row)];
   }
   bool gauss_weight() const noexcept { return gauss_weight_; }
 
-  /// Actuator limits |u_i| <= limit_i: u beyond them is scaled down as a whole (warning::kSaturated,
-  /// saturation_scale). Returns false, changing nothing, unless every limit is > 0.
+  /// Actuator limits |u_i| <= limit_i: u beyond them is scaled down as a whole
+  /// (warning::kSaturated, saturation_scale). Returns false, changing nothing, unless every limit
+  /// is > 0.
   bool set_actuator_limit(const VectorK& limit) noexcept {
     for (int i = 0; i < K; ++i)
       if (!(limit(i) > Scalar(0))) return false;
@@ -236,8 +250,11 @@ class ActuatedController {
   template <typename Dq, typename Dqd>
   Status compute(const Eigen::MatrixBase<Dq>& q, const Eigen::MatrixBase<Dqd>& qd, Scalar t,
                  Output& out) noexcept {
-    out = Output{};
-    if (!q.allFinite() || !qd.allFinite() || !std::isfinite(t)) return fail(out, Status::kNonFiniteInput, input::kState);
+    if (!q.allFinite() || !qd.allFinite() || !std::isfinite(t)) {
+      out.constraint_error.setZero();
+      out.constraint_error_rate.setZero();
+      return fail(out, Status::kNonFiniteInput, input::kState);
+    }
     const VectorN qv = q;
     const VectorN qdv = qd;
     const Status measured = evaluate(qv, qdv, t, out);
@@ -249,8 +266,9 @@ class ActuatedController {
     const VectorP e = out.constraint_error, e_rate = out.constraint_error_rate;
     VectorN q_m, qd_m;
     prediction_.predict(options_.hold, qv, qdv, t, out.acceleration, q_m, qd_m);
-    Status status = q_m.allFinite() && qd_m.allFinite() ? evaluate(q_m, qd_m, t + options_.hold.lead(), out)
-                                                        : Status::kNonFiniteInput;
+    Status status = q_m.allFinite() && qd_m.allFinite()
+                        ? evaluate(q_m, qd_m, t + options_.hold.lead(), out)
+                        : Status::kNonFiniteInput;
     if (failed(status)) {
       status = evaluate(qv, qdv, t, out);
       out.diagnostics.warnings |= warning::kHoldAtMeasuredState;
@@ -286,20 +304,26 @@ class ActuatedController {
     for (int i = 0; i < P; ++i) {
       if (RowLayout<M>::physical(i) || !active_[static_cast<std::size_t>(i)]) continue;
       const auto k = static_cast<std::size_t>(i);
-      correction(i) =
-          row_correction(row_gains_[k], row_robust_[k], terms_.constraint_error(i), terms_.constraint_error_rate(i));
+      correction(i) = row_correction(row_gains_[k], row_robust_[k], terms_.constraint_error(i),
+                                     terms_.constraint_error_rate(i));
     }
 
     // A = L L^T; a = A^-1 (Q - f); L^-1 B; C^T = L^-1 D^T.
-    l_ = terms_.mass_matrix;
-    if (!small_dense::cholesky_in_place(l_)) return fail(out, Status::kMassMatrixNotPositiveDefinite, 0);
+    if (!factor_mass()) return fail(out, Status::kMassMatrixNotPositiveDefinite, 0);
     VectorN a = terms_.applied_force - terms_.nonlinear_force;
-    small_dense::solve_lower_in_place(l_, a);
-    small_dense::solve_lower_transposed_in_place(l_, a);
-    MatrixNK lb = b_;
-    small_dense::solve_lower_in_place(l_, lb);
+    solve_l(a);
+    solve_lt(a);
+    // Without B and with Gauss's weight (W = A^-1 = L^-T L^-1) the square root W^(1/2) = L^-1
+    // makes the scaled task matrix D L^-T = C itself and u = L C^+ r: eq. (32) with no basis of
+    // B to build (kIdentityGauss below). L^-1 B is needed otherwise.
+    const bool identity_gauss = !ActuatedModel<M> && gauss_weight_;
+    MatrixNK lb;
+    if (!identity_gauss) {
+      lb = b_;
+      solve_l(lb);
+    }
     Eigen::Matrix<Scalar, N, P> ct = terms_.constraint_matrix.transpose();
-    small_dense::solve_lower_in_place(l_, ct);
+    solve_l(ct);
     const Scalar eps = std::numeric_limits<Scalar>::epsilon();
 
     // The task rows' C_c^T, and with physical rows: a_p, and C_c^T projected onto the directions
@@ -339,7 +363,7 @@ class ActuatedController {
       // a_p = a + L^-T C_p^+ (g_p - D_p a), C_p^+ = U_p S_p^+ V_p^T.
       VectorN shift = VectorN::Zero();
       for (int j = 0; j < free_basis_rank_; ++j) shift += up.col(j) * (vp.col(j).dot(rp) / sp(j));
-      small_dense::solve_lower_transposed_in_place(l_, shift);
+      solve_lt(shift);
       a += shift;
       physical_basis_ = up;
       project_free(ctc);
@@ -349,7 +373,9 @@ class ActuatedController {
     // pseudo-inverse's answer to u.
     MatrixNK g_dirs;
     MatrixKK back;
-    if (gauss_weight_) {
+    if (identity_gauss) {
+      // G = I, back = L: set below without the products.
+    } else if (gauss_weight_) {
       if constexpr (K > N) {
         return fail(out, Status::kWeightNotPositiveDefinite, 0);  // more actuators than coordinates
       } else {
@@ -368,7 +394,8 @@ class ActuatedController {
           r(j, j) = g_dirs.col(j).norm();
           // Columns dependent to within sqrt(eps) (exactly dependent ones leave rounding here):
           // W's condition would exceed 1 / eps.
-          if (!(r(j, j) > std::sqrt(eps) * largest)) return fail(out, Status::kWeightNotPositiveDefinite, 0);
+          if (!(r(j, j) > std::sqrt(eps) * largest))
+            return fail(out, Status::kWeightNotPositiveDefinite, 0);
           g_dirs.col(j) /= r(j, j);
         }
         back = MatrixKK::Identity();  // R^-1 by back substitution: u = R^-1 (C U)^+ r
@@ -387,20 +414,16 @@ class ActuatedController {
       back = MatrixKK::Identity();
       small_dense::solve_lower_transposed_in_place(weight_factor_, back);  // Lw^-T
     }
-    const Eigen::Matrix<Scalar, kTask, K> task = ctc.transpose() * g_dirs;
+    Eigen::Matrix<Scalar, kTask, K> task;
+    if constexpr (!ActuatedModel<M>) {
+      if (identity_gauss)
+        task = ctc.transpose();
+      else
+        task = ctc.transpose() * g_dirs;
+    } else {
+      task = ctc.transpose() * g_dirs;
+    }
 
-    // Thin SVD of the task matrix (or of its transpose, so that rows >= columns).
-    constexpr int kRows = K >= kTask ? K : kTask;
-    constexpr int kCols = K >= kTask ? kTask : K;
-    Eigen::Matrix<Scalar, kRows, kCols> w;
-    if constexpr (K >= kTask)
-      w = task.transpose();
-    else
-      w = task;
-    Eigen::Matrix<Scalar, kCols, 1> sigma;
-    Eigen::Matrix<Scalar, kCols, kCols> v;
-    if (!small_dense::jacobi_svd_in_place(w.data(), kRows, kCols, sigma.data(), v.data()))
-      return fail(out, Status::kNonFiniteResult, 0);
     // With Gauss's weight the task's singular values are those of D A^(-1/2) along the actuated
     // directions: they are measured against D A^(-1/2) itself (its Frobenius norm), so that
     // actuators that barely reach the rows (one row, one actuator, its reach vanishing) show as
@@ -409,48 +432,125 @@ class ActuatedController {
     // the physical rows already hold (or nearly) then shows as lost, not as a full-rank row of
     // rounding-sized singular values. The default relative tolerance covers the projection's
     // rounding too.
+    constexpr int kRows = K >= kTask ? K : kTask;
+    constexpr int kCols = K >= kTask ? kTask : K;
     const Scalar unprojected = std::sqrt(active_reach2);
-    const Scalar reach = gauss_weight_ ? std::max(sigma(0), unprojected) : sigma(0);
-    const Scalar relative = (options_.solver.rank_tolerance > Scalar(0) ? options_.solver.rank_tolerance
-                                                                        : Scalar(kPhysical > 0 ? kRows + N : kRows) * eps) *
-                            reach;
-    const Scalar floor = std::max(relative, options_.solver.min_singular_value);
-    int rank = 0;
-    bool near_singular = false;
-    Eigen::Matrix<Scalar, kCols, 1> inverse = Eigen::Matrix<Scalar, kCols, 1>::Zero();
-    for (int i = 0; i < kCols; ++i) {
-      if (sigma(i) > floor) {
-        inverse(i) = Scalar(1) / sigma(i);
-        ++rank;
-      } else if (sigma(i) > relative) {
-        near_singular = true;
+    const Scalar relative_tolerance = options_.solver.rank_tolerance > Scalar(0)
+                                          ? options_.solver.rank_tolerance
+                                          : Scalar(kPhysical > 0 ? kRows + N : kRows) * eps;
+
+    // The pseudo-inverse of the task matrix T. The default strategy answers a task of full row
+    // rank by its normal equations, x = T^T (T T^T)^-1 r (the plain law's own path for eq. 32),
+    // when every task row is active and the Cholesky factor's bounds show T well conditioned
+    // (reciprocal condition of T T^T at least fallback_rcond) with every singular value above the
+    // rank tolerance and the floor; otherwise, and for the other strategies, the one-sided Jacobi
+    // SVD decides exactly which directions to keep.
+    Eigen::Matrix<Scalar, kTask, kTask> gram_l_inv;  // normal equations: L_G^-1, T T^T = L_G L_G^T
+    bool normal = false;
+    Scalar sigma_hi = Scalar(0), sigma_lo = Scalar(0), reach = Scalar(0);
+    if constexpr (kTask >= 1 && kTask <= K) {
+      if (options_.solver.strategy == InverseStrategy::kCholeskyWithFallback &&
+          active_rows == kTask) {
+        Eigen::Matrix<Scalar, kTask, kTask> gram;
+        for (int j = 0; j < kTask; ++j)
+          for (int i = j; i < kTask; ++i) gram(i, j) = gram(j, i) = task.row(i).dot(task.row(j));
+        Scalar norm1 = Scalar(0);  // ||T T^T||_1 >= sigma_max^2
+        for (int j = 0; j < kTask; ++j) norm1 = std::max(norm1, gram.col(j).cwiseAbs().sum());
+        if (small_dense::all_finite(gram.data(), kTask * kTask) &&
+            small_dense::cholesky_in_place(gram)) {
+          const Scalar inverse_norm2 =
+              small_dense::invert_lower(gram, gram_l_inv);  // >= 1 / sigma_min^2
+          sigma_hi = std::sqrt(norm1);
+          sigma_lo = Scalar(1) / std::sqrt(inverse_norm2);
+          reach = gauss_weight_ ? std::max(sigma_hi, unprojected) : sigma_hi;
+          const Scalar rcond = Scalar(1) / (norm1 * inverse_norm2);
+          normal =
+              rcond >= options_.solver.fallback_rcond && std::isfinite(rcond) &&
+              rcond > Scalar(0) &&
+              sigma_lo > std::max(relative_tolerance * reach, options_.solver.min_singular_value);
+        }
       }
     }
-    // v = task^+ r for each part of r (its task rows), then u = back v.
-    auto control_for = [&](const VectorP& all) -> VectorK {
-      Eigen::Matrix<Scalar, kTask, 1> r;
+
+    // Otherwise the thin SVD of the task matrix (or of its transpose, so that rows >= columns).
+    Eigen::Matrix<Scalar, kRows, kCols> w;
+    Eigen::Matrix<Scalar, kCols, 1> sigma;
+    Eigen::Matrix<Scalar, kCols, kCols> v;
+    Eigen::Matrix<Scalar, kCols, 1> inverse = Eigen::Matrix<Scalar, kCols, 1>::Zero();
+    int rank = kTask;
+    bool near_singular = false;
+    if (!normal) {
+      if constexpr (K >= kTask)
+        w = task.transpose();
+      else
+        w = task;
+      if (!small_dense::jacobi_svd_in_place(w.data(), kRows, kCols, sigma.data(), v.data()))
+        return fail(out, Status::kNonFiniteResult, 0);
+      reach = gauss_weight_ ? std::max(sigma(0), unprojected) : sigma(0);
+      const Scalar relative = relative_tolerance * reach;
+      const Scalar floor = std::max(relative, options_.solver.min_singular_value);
+      rank = 0;
+      for (int i = 0; i < kCols; ++i) {
+        if (sigma(i) > floor) {
+          inverse(i) = Scalar(1) / sigma(i);
+          ++rank;
+        } else if (sigma(i) > relative) {
+          near_singular = true;
+        }
+      }
+      sigma_hi = sigma(0);
+      sigma_lo = rank > 0 ? sigma(rank - 1) : Scalar(0);
+    }
+    // X = T^+ R for the three parts of r at once (their task rows: -D_c a_p, g_c, the
+    // correction); U = back X (U = L X without B).
+    Eigen::Matrix<Scalar, kTask, 3> rhs;
+    {
+      const VectorP drift = -(terms_.constraint_matrix * a);  // a is a_p here
       for (int j = 0; j < kTask; ++j) {
         const int row = kTaskRows[static_cast<std::size_t>(j)];
-        r(j) = active_[static_cast<std::size_t>(row)] ? all(row) : Scalar(0);
+        const bool on = active_[static_cast<std::size_t>(row)];
+        rhs(j, 0) = on ? drift(row) : Scalar(0);
+        rhs(j, 1) = on ? terms_.constraint_rhs(row) : Scalar(0);
+        rhs(j, 2) = on ? correction(row) : Scalar(0);
       }
-      VectorK x;
-      if constexpr (K >= kTask)
-        x = w * (inverse.asDiagonal() * (v.transpose() * r));  // task^T = w S v^T
-      else
-        x = v * (inverse.asDiagonal() * (w.transpose() * r));  // task = w S v^T
-      return back * x;
-    };
-    out.control_closed_loop = control_for(-(terms_.constraint_matrix * a));  // a is a_p here
-    out.control_feedforward = control_for(terms_.constraint_rhs);
-    out.control_stabilizing = control_for(correction);
+    }
+    Eigen::Matrix<Scalar, K, 3> parts;
+    if (normal) {
+      if constexpr (kTask >= 1 && kTask <= K) {
+        small_dense::multiply_lower_in_place(gram_l_inv, rhs);             // L_G^-1 R
+        small_dense::multiply_lower_transposed_in_place(gram_l_inv, rhs);  // (T T^T)^-1 R
+        parts.noalias() = task.transpose() * rhs;
+      }
+    } else if constexpr (K >= kTask) {
+      parts.noalias() = w * (inverse.asDiagonal() * (v.transpose() * rhs));  // task^T = w S v^T
+    } else {
+      parts.noalias() = v * (inverse.asDiagonal() * (w.transpose() * rhs));  // task = w S v^T
+    }
+    bool mapped = false;
+    if constexpr (!ActuatedModel<M>) {
+      if (identity_gauss) {
+        multiply_l(parts);
+        mapped = true;
+      }
+    }
+    if (!mapped) parts = (back * parts).eval();
+    out.control_closed_loop = parts.col(0);
+    out.control_feedforward = parts.col(1);
+    out.control_stabilizing = parts.col(2);
     out.control = out.control_closed_loop + out.control_feedforward + out.control_stabilizing;
     if (!out.control.allFinite()) return fail(out, Status::kNonFiniteResult, 0);
 
     SolveDiagnostics<Scalar>& d = out.diagnostics;
+    d.strategy_used = normal ? InverseStrategy::kCholeskyWithFallback : InverseStrategy::kSvd;
+    // The normal equations were the strategy's first choice and could not answer, as in the plain
+    // law.
+    if (!normal && options_.solver.strategy == InverseStrategy::kCholeskyWithFallback &&
+        active_rows == kTask && kTask <= K)
+      d.warnings |= warning::kFellBackToSvd;
     d.rank = rank;
-    d.sigma_max = sigma(0);
-    d.sigma_min_kept = rank > 0 ? sigma(rank - 1) : Scalar(0);
-    d.condition_estimate = rank > 0 ? reach / sigma(rank - 1) : Scalar(0);
+    d.sigma_max = sigma_hi;
+    d.sigma_min_kept = sigma_lo;
+    d.condition_estimate = rank > 0 ? reach / sigma_lo : Scalar(0);
     if (rank < active_rows) d.warnings |= warning::kRankDeficient;
     if (near_singular) d.warnings |= warning::kNearSingular;
     if (d.condition_estimate > options_.solver.warn_condition)
@@ -461,12 +561,13 @@ class ActuatedController {
       d.sigma_max = unprojected;
       reach_seen_ = flag_vanishing_reach(options_.solver.vanishing_ratio, reach_seen_, d);
     }
-    d.sigma_max = sigma(0);
+    d.sigma_max = sigma_hi;
 
     // Actuator limits: u and its parts scaled as a whole.
     for (int i = 0; i < K; ++i) {
       const Scalar magnitude = std::abs(out.control(i));
-      if (magnitude > limit_(i)) out.saturation_scale = std::min(out.saturation_scale, limit_(i) / magnitude);
+      if (magnitude > limit_(i))
+        out.saturation_scale = std::min(out.saturation_scale, limit_(i) / magnitude);
     }
     if (out.saturation_scale < Scalar(1)) {
       const Scalar k = out.saturation_scale;
@@ -477,30 +578,87 @@ class ActuatedController {
       out.control = out.control.cwiseMax(-limit_).cwiseMin(limit_);
       d.warnings |= warning::kSaturated;
     }
-    out.force = b_ * out.control;
-    out.closed_loop = b_ * out.control_closed_loop;
-    out.feedforward = b_ * out.control_feedforward;
-    out.stabilizing = b_ * out.control_stabilizing;
+    if constexpr (ActuatedModel<M>) {
+      out.force = b_ * out.control;
+      out.closed_loop = b_ * out.control_closed_loop;
+      out.feedforward = b_ * out.control_feedforward;
+      out.stabilizing = b_ * out.control_stabilizing;
+    } else {  // B = I
+      out.force = out.control;
+      out.closed_loop = out.control_closed_loop;
+      out.feedforward = out.control_feedforward;
+      out.stabilizing = out.control_stabilizing;
+    }
     // q'' = a_p + M_p B u = a_p + L^-T P_n (L^-1 B) u.
-    VectorN pushed = lb * out.control;
+    VectorN pushed;
+    if constexpr (!ActuatedModel<M>) {
+      pushed = out.control;
+      if (identity_gauss)
+        solve_l(pushed);
+      else
+        pushed = lb * out.control;
+    } else {
+      pushed = lb * out.control;
+    }
     if constexpr (kPhysical > 0) project_free(pushed);
-    small_dense::solve_lower_transposed_in_place(l_, pushed);
+    solve_lt(pushed);
     out.acceleration = a + pushed;
-    if (!out.force.allFinite() || !out.acceleration.allFinite()) return fail(out, Status::kNonFiniteResult, 0);
+    if (!out.force.allFinite() || !out.acceleration.allFinite())
+      return fail(out, Status::kNonFiniteResult, 0);
 
     // Which rows are met: |D_i q'' - g_i| against the residual tolerance at the row's own scale.
     const VectorP g = terms_.constraint_rhs + correction;
     out.row_residual = terms_.constraint_matrix * out.acceleration - g;
     const Scalar acceleration2 = out.acceleration.squaredNorm();
     for (int i = 0; i < P; ++i) {
-      const Scalar scale2 = g(i) * g(i) + terms_.constraint_matrix.row(i).squaredNorm() * acceleration2;
+      const Scalar scale2 =
+          g(i) * g(i) + terms_.constraint_matrix.row(i).squaredNorm() * acceleration2;
       const Scalar tol = options_.solver.residual_tolerance;
       const bool met = std::abs(out.row_residual(i)) <= tol * std::sqrt(scale2);  // false for NaN
-      if (!met && i < 64 && active_[static_cast<std::size_t>(i)]) out.unmet_rows |= std::uint64_t{1} << i;
+      if (!met && i < 64 && active_[static_cast<std::size_t>(i)])
+        out.unmet_rows |= std::uint64_t{1} << i;
     }
     d.residual_norm = out.row_residual.norm();
     if (out.unmet_rows != 0) d.warnings |= warning::kConstraintsNotMet;
     return d.status;
+  }
+
+  // A = L L^T: Cholesky, or square roots of a declared-diagonal A (read on its diagonal only).
+  bool factor_mass() noexcept {
+    if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal) {
+      for (int i = 0; i < N; ++i) {
+        const Scalar m = terms_.mass_matrix(i, i);
+        if (!(m > Scalar(0))) return false;
+        l_diag_(i) = std::sqrt(m);
+        l_inv_diag_(i) = Scalar(1) / l_diag_(i);
+        l_(i, i) = l_diag_(i);
+      }
+      return true;
+    } else {
+      l_ = terms_.mass_matrix;
+      return small_dense::cholesky_in_place(l_);
+    }
+  }
+  template <int Cols>
+  void solve_l(Eigen::Matrix<Scalar, N, Cols>& x) const noexcept {  // x = L^-1 x
+    if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal)
+      x = l_inv_diag_.asDiagonal() * x;
+    else
+      small_dense::solve_lower_in_place(l_, x);
+  }
+  template <int Cols>
+  void solve_lt(Eigen::Matrix<Scalar, N, Cols>& x) const noexcept {  // x = L^-T x
+    if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal)
+      x = l_inv_diag_.asDiagonal() * x;
+    else
+      small_dense::solve_lower_transposed_in_place(l_, x);
+  }
+  template <int Cols>
+  void multiply_l(Eigen::Matrix<Scalar, N, Cols>& x) const noexcept {  // x = L x
+    if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal)
+      x = l_diag_.asDiagonal() * x;
+    else
+      small_dense::multiply_lower_in_place(l_, x);
   }
 
   // x -= U_p (U_p^T x): onto the directions the physical rows leave free.
@@ -539,7 +697,10 @@ class ActuatedController {
   MatrixKK weight_factor_ = MatrixKK::Identity();
   TermsOf<M> terms_{};
   MatrixNK b_ = MatrixNK::Zero();
-  Eigen::Matrix<Scalar, N, N> l_ = Eigen::Matrix<Scalar, N, N>::Zero();
+  Eigen::Matrix<Scalar, N, N> l_ =
+      Eigen::Matrix<Scalar, N, N>::Zero();  // A = L L^T (lower triangle)
+  VectorN l_diag_ = VectorN::Zero(),
+          l_inv_diag_ = VectorN::Zero();  // a declared-diagonal A's L, L^-1
   HoldPrediction<N, Scalar> prediction_;  ///< the hold's memory
   static constexpr std::array<int, static_cast<std::size_t>(kTask)> kTaskRows =
       detail::rows_of_kind<M, false, kTask>();

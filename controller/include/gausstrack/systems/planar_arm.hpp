@@ -115,4 +115,17 @@ struct PlanarArm {
   }
 };
 
+/// The same arm with its wrist (joint 3) passive: motors at the shoulder and the elbow alone,
+/// K = 2, B = [e1 e2] (torques [N m]). Two motors hold the hand's two rows; the wrist link, hinged
+/// at the hand's prescribed path, swings as gravity and the arm's motion take it (the task's zero
+/// dynamics: a pendulum hanging from the hand while link 3 points up from the wrist).
+template <typename Scalar_ = double>
+struct PlanarArmPassiveWrist : PlanarArm<Scalar_> {
+  using Scalar = Scalar_;
+  static constexpr int kActuators = 2;
+  void actuation(const Eigen::Matrix<Scalar, 3, 1>&, Scalar, Eigen::Matrix<Scalar, 3, 2>& b) const noexcept {
+    b << Scalar(1), Scalar(0), Scalar(0), Scalar(1), Scalar(0), Scalar(0);
+  }
+};
+
 }  // namespace gausstrack::systems

@@ -25,7 +25,8 @@ static_assert(control_command_t::MAX_DIMENSION == kMaxDimension &&
 
 /// q, q' or a force on the wire's side: fixed size N, or at most 32 entries without allocation.
 template <int N>
-using WireVector = Eigen::Matrix<double, N, 1, Eigen::ColMajor, N == Eigen::Dynamic ? kMaxDimension : N, 1>;
+using WireVector =
+    Eigen::Matrix<double, N, 1, Eigen::ColMajor, N == Eigen::Dynamic ? kMaxDimension : N, 1>;
 
 /// Why a message was refused (each is counted by the nodes).
 enum class Refusal : std::uint8_t {
@@ -37,10 +38,14 @@ enum class Refusal : std::uint8_t {
 
 inline const char* to_string(Refusal r) noexcept {
   switch (r) {
-    case Refusal::kNone: return "none";
-    case Refusal::kMalformed: return "malformed";
-    case Refusal::kDimension: return "wrong dimension";
-    case Refusal::kNonFinite: return "non-finite";
+    case Refusal::kNone:
+      return "none";
+    case Refusal::kMalformed:
+      return "malformed";
+    case Refusal::kDimension:
+      return "wrong dimension";
+    case Refusal::kNonFinite:
+      return "non-finite";
   }
   return "unknown";
 }
@@ -48,17 +53,22 @@ inline const char* to_string(Refusal r) noexcept {
 template <int N>
 class Codec {
  public:
-  static_assert(N == Eigen::Dynamic || (N >= 1 && N <= kMaxDimension), "the messages carry 1..32 coordinates");
+  static_assert(N == Eigen::Dynamic || (N >= 1 && N <= kMaxDimension),
+                "the messages carry 1..32 coordinates");
   using Vector = WireVector<N>;
 
   /// `dimension` must be N for a fixed N; 1..32 for Eigen::Dynamic (checked by valid()).
   explicit Codec(int dimension = N) noexcept : n_(dimension) {}
-  bool valid() const noexcept { return n_ >= 1 && n_ <= kMaxDimension && (N == Eigen::Dynamic || n_ == N); }
+  bool valid() const noexcept {
+    return n_ >= 1 && n_ <= kMaxDimension && (N == Eigen::Dynamic || n_ == N);
+  }
   int dimension() const noexcept { return n_; }
 
   /// Decodes a plant state into `msg` and its q, q'.
-  Refusal decode_state(const void* data, std::size_t size, plant_state_t& msg, Vector& q, Vector& qd) const noexcept {
-    if (size > static_cast<std::size_t>(INT32_MAX) || msg.decode(data, 0, static_cast<int>(size)) < 0)
+  Refusal decode_state(const void* data, std::size_t size, plant_state_t& msg, Vector& q,
+                       Vector& qd) const noexcept {
+    if (size > static_cast<std::size_t>(INT32_MAX) ||
+        msg.decode(data, 0, static_cast<int>(size)) < 0)
       return Refusal::kMalformed;
     if (msg.dimension != n_) return Refusal::kDimension;
     if (msg.hold_delay_ns < 0 || msg.hold_delay_ns > kMaxHoldDelayNs) return Refusal::kMalformed;
@@ -72,24 +82,33 @@ class Codec {
   /// Decodes a command into `msg` and its force. A failed solve's command (status not 0) is
   /// accepted with a zero force whatever its force entries say; otherwise a non-finite force is
   /// refused.
-  Refusal decode_command(const void* data, std::size_t size, control_command_t& msg, Vector& force) const noexcept {
-    if (size > static_cast<std::size_t>(INT32_MAX) || msg.decode(data, 0, static_cast<int>(size)) < 0)
+  /// The actuator commands (msg.actuators of them, at most kMaxDimension) are refused in the same
+  /// way: a count out of range as malformed, a non-finite command of a successful solve as
+  /// non-finite.
+  Refusal decode_command(const void* data, std::size_t size, control_command_t& msg,
+                         Vector& force) const noexcept {
+    if (size > static_cast<std::size_t>(INT32_MAX) ||
+        msg.decode(data, 0, static_cast<int>(size)) < 0)
       return Refusal::kMalformed;
     if (msg.dimension != n_) return Refusal::kDimension;
+    if (msg.actuators < 0 || msg.actuators > kMaxDimension) return Refusal::kMalformed;
     if (msg.status != 0) {
       force = Vector::Zero(n_);
       return Refusal::kNone;
     }
     force = Eigen::Map<const Vector>(msg.force, n_);
     if (!force.allFinite()) return Refusal::kNonFinite;
+    for (int i = 0; i < msg.actuators; ++i)
+      if (!std::isfinite(msg.control[i])) return Refusal::kNonFinite;
     return Refusal::kNone;
   }
 
   /// Fills the state message (entries past the dimension zero) and encodes it into `buffer`.
   /// Returns the encoded size, or -1 if the buffer is too small.
   template <typename Q, typename Qd>
-  int encode_state(plant_state_t& msg, const Eigen::MatrixBase<Q>& q, const Eigen::MatrixBase<Qd>& qd,
-                   std::uint8_t* buffer, std::size_t capacity) const noexcept {
+  int encode_state(plant_state_t& msg, const Eigen::MatrixBase<Q>& q,
+                   const Eigen::MatrixBase<Qd>& qd, std::uint8_t* buffer,
+                   std::size_t capacity) const noexcept {
     msg.dimension = n_;
     for (int i = 0; i < kMaxDimension; ++i) {
       msg.q[i] = i < n_ ? q(i) : 0.0;
@@ -98,18 +117,40 @@ class Codec {
     return encode(msg, buffer, capacity);
   }
 
+  /// A command with the force alone (msg.actuators = 0).
   template <typename F>
-  int encode_command(control_command_t& msg, const Eigen::MatrixBase<F>& force, std::uint8_t* buffer,
-                     std::size_t capacity) const noexcept {
+  int encode_command(control_command_t& msg, const Eigen::MatrixBase<F>& force,
+                     std::uint8_t* buffer, std::size_t capacity) const noexcept {
     msg.dimension = n_;
-    for (int i = 0; i < kMaxDimension; ++i) msg.force[i] = i < n_ ? force(i) : 0.0;
+    msg.actuators = 0;
+    for (int i = 0; i < kMaxDimension; ++i) {
+      msg.force[i] = i < n_ ? force(i) : 0.0;
+      msg.control[i] = 0.0;
+    }
+    return encode(msg, buffer, capacity);
+  }
+  /// A command with the force B u and the actuator commands u (u.size() of them, at most
+  /// kMaxDimension; -1 beyond).
+  template <typename F, typename U>
+  int encode_command(control_command_t& msg, const Eigen::MatrixBase<F>& force,
+                     const Eigen::MatrixBase<U>& control, std::uint8_t* buffer,
+                     std::size_t capacity) const noexcept {
+    const auto k = static_cast<int>(control.size());
+    if (k > kMaxDimension) return -1;
+    msg.dimension = n_;
+    msg.actuators = k;
+    for (int i = 0; i < kMaxDimension; ++i) {
+      msg.force[i] = i < n_ ? force(i) : 0.0;
+      msg.control[i] = i < k ? control(i) : 0.0;
+    }
     return encode(msg, buffer, capacity);
   }
 
   template <typename A, typename B, typename C>
   int encode_diagnostics(control_diagnostics_t& msg, const Eigen::MatrixBase<A>& closed_loop,
-                         const Eigen::MatrixBase<B>& feedforward, const Eigen::MatrixBase<C>& stabilizing,
-                         std::uint8_t* buffer, std::size_t capacity) const noexcept {
+                         const Eigen::MatrixBase<B>& feedforward,
+                         const Eigen::MatrixBase<C>& stabilizing, std::uint8_t* buffer,
+                         std::size_t capacity) const noexcept {
     msg.dimension = n_;
     for (int i = 0; i < kMaxDimension; ++i) {
       msg.closed_loop[i] = i < n_ ? closed_loop(i) : 0.0;

@@ -33,25 +33,25 @@
 #include <string>
 #include <utility>
 
+#include "gausstrack/actuation.hpp"
 #include "gausstrack/model.hpp"
 #include "gausstrack/nodes/auth.hpp"
 #include "gausstrack/nodes/codec.hpp"
 #include "gausstrack/nodes/latency_recorder.hpp"
 #include "gausstrack/nodes/message_log.hpp"
 #include "gausstrack/nodes/process.hpp"
-#include "gausstrack/actuation.hpp"
 
 namespace gausstrack::nodes {
 
 /// What the controller node counted.
 struct ControllerCounts {
-  long served = 0;      ///< states answered with a command
-  long repeated = 0;    ///< repeated states answered again with the same command
-  long failed = 0;      ///< commands reporting a failed solve (force zero)
-  long rejected = 0;    ///< states refused (any reason below)
+  long served = 0;    ///< states answered with a command
+  long repeated = 0;  ///< repeated states answered again with the same command
+  long failed = 0;    ///< commands reporting a failed solve (force zero)
+  long rejected = 0;  ///< states refused (any reason below)
   long malformed = 0, wrong_dimension = 0, non_finite = 0, stale = 0;
-  AuthCounts auth;      ///< refused by authentication, by reason (also in rejected)
-  long runs = 0;        ///< plant runs seen
+  AuthCounts auth;  ///< refused by authentication, by reason (also in rejected)
+  long runs = 0;    ///< plant runs seen
 };
 
 template <Model M>
@@ -65,7 +65,9 @@ class ControllerNode {
   /// only). `diagnostics`: where to publish each command's diagnostics, or nullptr.
   ControllerNode(Controller controller, Outbox& commands, Outbox* diagnostics = nullptr,
                  std::size_t compute_times = 1 << 16)
-      : controller_(std::move(controller)), commands_(commands), diagnostics_(diagnostics),
+      : controller_(std::move(controller)),
+        commands_(commands),
+        diagnostics_(diagnostics),
         compute_ns_(compute_times) {
     ended_runs_.fill(INT64_MIN);
   }
@@ -80,7 +82,9 @@ class ControllerNode {
   void authenticate(ChannelAuth& states) noexcept { auth_ = &states; }
 
   /// LCM subscription handler.
-  void on_state(const lcm::ReceiveBuffer* rbuf, const std::string&) noexcept { handle(rbuf->data, rbuf->data_size); }
+  void on_state(const lcm::ReceiveBuffer* rbuf, const std::string&) noexcept {
+    handle(rbuf->data, rbuf->data_size);
+  }
 
   /// Validates one encoded plant state and, if it is served, publishes the command.
   void handle(const void* data, std::size_t size) noexcept {
@@ -89,14 +93,16 @@ class ControllerNode {
       return;
     }
     const Refusal r = codec_.decode_state(data, size, state_, q_, qd_);
-    if (r != Refusal::kNone) return refuse(r == Refusal::kMalformed   ? counts_.malformed
-                                           : r == Refusal::kDimension ? counts_.wrong_dimension
-                                                                      : counts_.non_finite);
+    if (r != Refusal::kNone)
+      return refuse(r == Refusal::kMalformed   ? counts_.malformed
+                    : r == Refusal::kDimension ? counts_.wrong_dimension
+                                               : counts_.non_finite);
     if (state_.sequence < 0) return refuse(counts_.stale);
     if (state_.run_id != run_id_ || counts_.runs == 0) {
       for (std::int64_t ended : ended_runs_)
         if (ended == state_.run_id) return refuse(counts_.stale);
-      if (counts_.runs > 0) ended_runs_[static_cast<std::size_t>(counts_.runs) % ended_runs_.size()] = run_id_;
+      if (counts_.runs > 0)
+        ended_runs_[static_cast<std::size_t>(counts_.runs) % ended_runs_.size()] = run_id_;
       run_id_ = state_.run_id;
       last_sequence_ = -1;
       ++counts_.runs;
@@ -128,8 +134,16 @@ class ControllerNode {
     command_.status = static_cast<std::int32_t>(status);
     command_.warnings = static_cast<std::int32_t>(out_.diagnostics.warnings);
     command_.compute_ns = compute_ns;
-    last_bytes_ = codec_.encode_command(command_, out_.force, last_command_.data(), last_command_.size());
-    if (last_bytes_ > 0) commands_.publish(last_command_.data(), static_cast<std::size_t>(last_bytes_), command_.utime);
+    // An actuated law's command carries its actuator commands u beside the force B u.
+    if constexpr (requires { out_.control; })
+      last_bytes_ = codec_.encode_command(command_, out_.force, out_.control, last_command_.data(),
+                                          last_command_.size());
+    else
+      last_bytes_ =
+          codec_.encode_command(command_, out_.force, last_command_.data(), last_command_.size());
+    if (last_bytes_ > 0)
+      commands_.publish(last_command_.data(), static_cast<std::size_t>(last_bytes_),
+                        command_.utime);
 
     if (diagnostics_) {
       diag_.utime = command_.utime;
@@ -140,8 +154,8 @@ class ControllerNode {
       diag_.rank = out_.diagnostics.rank;
       diag_.condition_estimate = out_.diagnostics.condition_estimate;
       diag_.saturation_scale = out_.saturation_scale;
-      const int n = codec_.encode_diagnostics(diag_, out_.closed_loop, out_.feedforward, out_.stabilizing,
-                                              buffer_.data(), buffer_.size());
+      const int n = codec_.encode_diagnostics(diag_, out_.closed_loop, out_.feedforward,
+                                              out_.stabilizing, buffer_.data(), buffer_.size());
       if (n > 0) diagnostics_->publish(buffer_.data(), static_cast<std::size_t>(n), diag_.utime);
     }
   }

@@ -32,6 +32,8 @@ bool visit_builtin_model(std::string_view name, F&& f) {
   if (name == "nonholonomic_particle")
     return f(std::type_identity<systems::NonholonomicParticle<double>>{}), true;
   if (name == "planar_arm") return f(std::type_identity<systems::PlanarArm<double>>{}), true;
+  if (name == "planar_arm_passive_wrist")
+    return f(std::type_identity<systems::PlanarArmPassiveWrist<double>>{}), true;
   if (name == "cart_double_pendulum")
     return f(std::type_identity<systems::CartDoublePendulum<double>>{}), true;
   if (name == "cart_pole") return f(std::type_identity<systems::CartPole<double>>{}), true;
@@ -42,8 +44,9 @@ bool visit_builtin_model(std::string_view name, F&& f) {
 
 /// Every name visit_builtin_model knows, in one list.
 inline constexpr const char* kBuiltinModels[] = {
-    "coupled_duffing", "duffing_chain",        "pendulum",  "nonholonomic_particle",
-    "planar_arm",      "cart_double_pendulum", "cart_pole", "differential_drive"};
+    "coupled_duffing",      "duffing_chain", "pendulum",          "nonholonomic_particle",
+    "planar_arm",           "planar_arm_passive_wrist", "cart_double_pendulum", "cart_pole",
+    "differential_drive"};
 
 /// Their names, for messages ("coupled_duffing, duffing_chain, ...").
 std::string builtin_model_names();
