@@ -9,6 +9,7 @@
 #include <cmath>
 #include <string>
 
+#include "../../examples/my_first_model/my_model.hpp"
 #include "gausstrack/plant_sim/models.hpp"
 #include "gausstrack/plant_sim/scene.hpp"
 #include "gausstrack/plant_sim/simulation.hpp"
@@ -43,8 +44,8 @@ TEST(Models, ChainOfEightTracksItsFourRelativeDisplacements) {
   }
 }
 
-// The cart-pole declares one actuator (the cart's motor): the scene's law is the actuated one, every
-// force it applies is along the cart alone (exactly zero on the pendulum's angle), and the
+// The cart-pole declares one actuator (the cart's motor): the scene's law is the actuated one,
+// every force it applies is along the cart alone (exactly zero on the pendulum's angle), and the
 // pendulum follows its angle. Sampled at 1 kHz, the held law (midpoint, the default) is far more
 // accurate than the law at the measured state, through the same prediction as the plain law's.
 TEST(Models, CartPoleSwingsItsPendulumWithTheCartForceAlone) {
@@ -59,13 +60,15 @@ TEST(Models, CartPoleSwingsItsPendulumWithTheCartForceAlone) {
     largest = std::max(largest, std::abs(s.u[0]));
   }
   EXPECT_GT(largest, 0.1);  // the cart is pushed
-  const std::vector<std::string> sampled = {"control.mode=sampled", "control.rate=1000", "duration=2"};
+  const std::vector<std::string> sampled = {"control.mode=sampled", "control.rate=1000",
+                                            "duration=2"};
   std::vector<std::string> sample_law = sampled;
   sample_law.push_back("tracking.hold=sample");
   const RunResult held = run_scene(load_scene(kScenes + "/cart_pole.yaml", sampled));
   const RunResult plain = run_scene(load_scene(kScenes + "/cart_pole.yaml", sample_law));
   EXPECT_GT(plain.summary.max_tracking_error, 50 * held.summary.max_tracking_error)
-      << "held " << held.summary.max_tracking_error << ", at the measured state " << plain.summary.max_tracking_error;
+      << "held " << held.summary.max_tracking_error << ", at the measured state "
+      << plain.summary.max_tracking_error;
 }
 
 // The arm with its wrist passive: the plant is the full arm, the law pushes the shoulder and the
@@ -84,8 +87,8 @@ TEST(Models, ArmWithAPassiveWristTracksWithTwoMotors) {
     const double wrist = s.q[0] + s.q[1] + s.q[2];  // link 3's absolute angle
     wrist_lo = std::min(wrist_lo, wrist), wrist_hi = std::max(wrist_hi, wrist);
   }
-  EXPECT_GT(largest, 1.0);                // the motors hold the arm against gravity
-  EXPECT_GT(wrist_hi - wrist_lo, 1e-3);   // the wrist link moves, unactuated
+  EXPECT_GT(largest, 1.0);               // the motors hold the arm against gravity
+  EXPECT_GT(wrist_hi - wrist_lo, 1e-3);  // the wrist link moves, unactuated
 }
 
 // The differential drive: drive force and yaw torque only, the ground holding its wheels against
@@ -153,20 +156,55 @@ TEST(Models, TheRobustTermHoldsAMismatchedPlantWithinItsBound) {
     const Scene scene = load_scene(kScenes + "/" + name + ".yaml");
     ASSERT_GT(scene.tracking.robust_bound, 0.0);
     const RunResult robust = run_scene(scene);
-    const RunResult alone = run_scene(load_scene(kScenes + "/" + name + ".yaml", {"tracking.robust=null"}));
+    const RunResult alone =
+        run_scene(load_scene(kScenes + "/" + name + ".yaml", {"tracking.robust=null"}));
     ASSERT_TRUE(robust.summary.failure.empty()) << robust.summary.failure;
     ASSERT_TRUE(alone.summary.failure.empty()) << alone.summary.failure;
     constexpr auto kSaturated = static_cast<std::size_t>(std::countr_zero(warning::kSaturated));
-    EXPECT_EQ(robust.summary.warnings.by_kind[kSaturated], 0u);  // the same limit, reached by neither
+    EXPECT_EQ(robust.summary.warnings.by_kind[kSaturated],
+              0u);  // the same limit, reached by neither
     EXPECT_EQ(alone.summary.warnings.by_kind[kSaturated], 0u);
-    const double bound = robust_error_bound(Stabilization<double>{scene.tracking.zeta, scene.tracking.stabilization_omega},
-                                            Robust<double>{scene.tracking.robust_bound, scene.tracking.robust_layer});
+    const double bound = robust_error_bound(
+        Stabilization<double>{scene.tracking.zeta, scene.tracking.stabilization_omega},
+        Robust<double>{scene.tracking.robust_bound, scene.tracking.robust_layer});
     EXPECT_LE(robust.summary.max_tracking_error, bound);
     EXPECT_GE(alone.summary.max_tracking_error, 10 * robust.summary.max_tracking_error)
-        << "alone " << alone.summary.max_tracking_error << ", robust " << robust.summary.max_tracking_error;
+        << "alone " << alone.summary.max_tracking_error << ", robust "
+        << robust.summary.max_tracking_error;
     EXPECT_GT(robust.summary.force_total_variation, 0.0);
     EXPECT_LE(robust.summary.force_total_variation, 1.5 * alone.summary.force_total_variation);
   }
+}
+
+// The tethered puck of examples/my_first_model (a user's own model) with its plant 10 % heavier
+// than the model and pushed by an unmodelled disturbance: the same 10x, bound and total variation
+// as above, under the same force limit.
+TEST(Models, TheRobustTermHoldsTheHeavierTetheredPuckWithinItsBound) {
+  const std::string path = kScenes + "/../../examples/my_first_model/tethered_puck.yaml";
+  RunOptions o;
+  o.models.push_back(model_factory<TetheredPuck>("tethered_puck"));
+  const std::vector<std::string> limit = {"tracking.force_limit=10.0"};
+  std::vector<std::string> with_robust = limit;
+  with_robust.push_back("tracking.robust={bound: 1.0, layer: 0.002}");
+  const Scene scene = load_scene(path, with_robust);
+  ASSERT_EQ(scene.plant_parameters.size(), 1u);  // the plant's mass differs from the model's
+  const RunResult robust = run_scene(scene, o);
+  const RunResult alone = run_scene(load_scene(path, limit), o);
+  ASSERT_TRUE(robust.summary.failure.empty()) << robust.summary.failure;
+  ASSERT_TRUE(alone.summary.failure.empty()) << alone.summary.failure;
+  constexpr auto kSaturated = static_cast<std::size_t>(std::countr_zero(warning::kSaturated));
+  EXPECT_EQ(robust.summary.warnings.by_kind[kSaturated], 0u);
+  EXPECT_EQ(alone.summary.warnings.by_kind[kSaturated], 0u);
+  const double bound = robust_error_bound(
+      Stabilization<double>{scene.tracking.zeta, scene.tracking.stabilization_omega},
+      Robust<double>{scene.tracking.robust_bound, scene.tracking.robust_layer});
+  EXPECT_LE(robust.summary.max_tracking_error, bound);
+  EXPECT_GE(alone.summary.max_tracking_error, 10 * robust.summary.max_tracking_error)
+      << "alone " << alone.summary.max_tracking_error << ", robust "
+      << robust.summary.max_tracking_error;
+  EXPECT_GT(robust.summary.force_total_variation, 0.0);
+  EXPECT_LE(robust.summary.force_total_variation, 1.5 * alone.summary.force_total_variation)
+      << robust.summary.force_total_variation << " against " << alone.summary.force_total_variation;
 }
 
 TEST(Models, PointMassChainEqualsTheChainModelAsItsOwnPlant) {
@@ -174,7 +212,8 @@ TEST(Models, PointMassChainEqualsTheChainModelAsItsOwnPlant) {
   const RunResult point_masses = run_scene(load_scene(scene));
   const RunResult model = run_scene(
       load_scene(scene, {"plant.masses=null", "plant.effects=[]", "plant.model=duffing_chain",
-                         "plant.parameters={m1: 2.0, m2: 1.0, k1: 10.0, k2: 12.0, kb1: 1.0, kb2: 2.0, c1: 0.1, c2: 0.15}"}));
+                         "plant.parameters={m1: 2.0, m2: 1.0, k1: 10.0, k2: 12.0, kb1: 1.0, kb2: "
+                         "2.0, c1: 0.1, c2: 0.15}"}));
   ASSERT_TRUE(model.summary.failure.empty()) << model.summary.failure;
   EXPECT_LT(max_difference(point_masses, model), 1e-8);
 }
@@ -191,8 +230,8 @@ TEST(Models, ArmTracksTheCircleFromItsScene) {
 TEST(Models, ArmMismatchIsBoundedByStabilization) {
   const std::string scene = kScenes + "/planar_arm.yaml";
   const RunResult with = run_scene(load_scene(scene, {"plant.parameters={mass_2: 1.65}"}));
-  const RunResult without =
-      run_scene(load_scene(scene, {"plant.parameters={mass_2: 1.65}", "tracking.stabilization.omega=0"}));
+  const RunResult without = run_scene(
+      load_scene(scene, {"plant.parameters={mass_2: 1.65}", "tracking.stabilization.omega=0"}));
   ASSERT_TRUE(with.summary.failure.empty() && without.summary.failure.empty());
   EXPECT_GT(without.summary.max_tracking_error, 1e-3);
   EXPECT_LT(with.summary.max_tracking_error, 1e-2);
@@ -254,12 +293,15 @@ output_period: 0.01
 TEST(Models, ProjectionRemovesConstraintDrift) {
   for (const char* scene : {"pendulum_fig2", "rosenberg"}) {
     const RunResult drift = run_scene(load_scene(kScenes + "/" + scene + ".yaml"));
-    const RunResult projected = run_scene(load_scene(kScenes + "/" + scene + ".yaml", {"plant.projection=true"}));
+    const RunResult projected =
+        run_scene(load_scene(kScenes + "/" + scene + ".yaml", {"plant.projection=true"}));
     ASSERT_TRUE(projected.summary.failure.empty()) << projected.summary.failure;
     EXPECT_EQ(drift.summary.projections, 0u);
     EXPECT_GE(projected.summary.projections, projected.summary.steps);
     EXPECT_LT(projected.summary.max_constraint_residual, 1e-9) << scene;
-    EXPECT_LT(projected.summary.max_constraint_residual, 1e-3 * drift.summary.max_constraint_residual) << scene;
+    EXPECT_LT(projected.summary.max_constraint_residual,
+              1e-3 * drift.summary.max_constraint_residual)
+        << scene;
     EXPECT_LT(max_difference(drift, projected), 1e-4) << scene;
   }
 }
@@ -267,9 +309,10 @@ TEST(Models, ProjectionRemovesConstraintDrift) {
 // Without interpolation (rk4, rkf78) each accepted step is projected once, before its samples are
 // taken: exactly one projection per step, and every sample is a projected state.
 TEST(Models, StepsWithoutInterpolationAreProjectedOnceEach) {
-  for (const char* method : {"integrator={method: rk4, step: 1.0e-3}", "integrator={method: rkf78, tolerance: 1.0e-8}"}) {
-    const RunResult r =
-        run_scene(load_scene(kScenes + "/pendulum_fig2.yaml", {method, "plant.projection=true", "duration=2"}));
+  for (const char* method : {"integrator={method: rk4, step: 1.0e-3}",
+                             "integrator={method: rkf78, tolerance: 1.0e-8}"}) {
+    const RunResult r = run_scene(load_scene(kScenes + "/pendulum_fig2.yaml",
+                                             {method, "plant.projection=true", "duration=2"}));
     ASSERT_TRUE(r.summary.failure.empty()) << r.summary.failure;
     EXPECT_EQ(r.summary.projections, r.summary.steps) << method;
     EXPECT_LT(r.summary.max_constraint_residual, 1e-9) << method;
@@ -323,13 +366,16 @@ TEST(Models, AUsersOwnModelRunsThroughRunOptionsAlone) {
     run_scene(parse_scene(kUserScene, "user"));
     FAIL() << "an unknown model ran";
   } catch (const SceneError& e) {
-    EXPECT_NE(std::string(e.what()).find("unknown model 'sine_tracker'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("unknown model 'sine_tracker'"), std::string::npos)
+        << e.what();
   }
   try {
     run_scene(parse_scene(kUserScene, "user", {"tracking.parameters.masss=1"}), o);
     FAIL() << "an unknown parameter was accepted";
   } catch (const SceneError& e) {
-    EXPECT_NE(std::string(e.what()).find("has no parameter 'masss' (known: mass)"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("has no parameter 'masss' (known: mass)"),
+              std::string::npos)
+        << e.what();
   }
 }
 
@@ -343,21 +389,26 @@ TEST(Models, ScenesNamingModelsAreCheckedWithFileLineAndKey) {
     }
     return "accepted";
   };
-  EXPECT_NE(error_of(arm, {"plant.parameters={mass_7: 1}"}).find("has no parameter 'mass_7'"), std::string::npos);
-  EXPECT_NE(error_of(arm, {"plant.coordinates=[a, b]"}).find("model 'planar_arm' has 3 coordinates"),
+  EXPECT_NE(error_of(arm, {"plant.parameters={mass_7: 1}"}).find("has no parameter 'mass_7'"),
             std::string::npos);
+  EXPECT_NE(
+      error_of(arm, {"plant.coordinates=[a, b]"}).find("model 'planar_arm' has 3 coordinates"),
+      std::string::npos);
   EXPECT_NE(error_of(arm, {"plant.effects=[{type: gravity, coordinate: q1, acceleration: 9.8}]"})
                 .find("a plant model's gravity is its own"),
             std::string::npos);
-  EXPECT_NE(error_of(arm, {"plant.masses=[1, 1, 1]"}).find("either point masses or a model"), std::string::npos);
-  EXPECT_NE(error_of(arm, {"tracking.model=coupled_duffing"}).find("has 2 coordinates, the plant has 3"),
+  EXPECT_NE(error_of(arm, {"plant.masses=[1, 1, 1]"}).find("either point masses or a model"),
             std::string::npos);
+  EXPECT_NE(
+      error_of(arm, {"tracking.model=coupled_duffing"}).find("has 2 coordinates, the plant has 3"),
+      std::string::npos);
   // The controller's own configuration: the tracking section alone, whatever else the file holds.
   const TrackingSpec spec = load_tracking(arm, {"tracking.strategy=svd"});
   EXPECT_EQ(spec.model, "planar_arm");
   EXPECT_EQ(spec.strategy, InverseStrategy::kSvd);
   EXPECT_EQ(spec.stabilization_omega, 20.0);
-  const TrackingSpec alone = parse_tracking("tracking: {model: pendulum, parameters: {mu: -0.1}}", "own.yaml");
+  const TrackingSpec alone =
+      parse_tracking("tracking: {model: pendulum, parameters: {mu: -0.1}}", "own.yaml");
   EXPECT_EQ(alone.parameter("mu", 0), -0.1);
 }
 

@@ -281,7 +281,11 @@ class ActuatedController {
  private:
   // The actuated law at (q, q', t).
   Status evaluate(const VectorN& qv, const VectorN& qdv, Scalar t, Output& out) noexcept {
-    out = Output{};
+    // Every vector of `out` is written below on success, and fail() resets them all: only what
+    // accumulates starts afresh here.
+    out.unmet_rows = 0;
+    out.saturation_scale = Scalar(1);
+    out.diagnostics = SolveDiagnostics<Scalar>{};
     evaluate_model(model_, qv, qdv, t, terms_);
     if constexpr (ActuatedModel<M>)
       model_.actuation(qv, t, b_);
@@ -289,15 +293,23 @@ class ActuatedController {
       b_.setIdentity();
     out.constraint_error = terms_.constraint_error;
     out.constraint_error_rate = terms_.constraint_error_rate;
+    using small_dense::all_finite;
     std::uint32_t bad = 0;
-    if (!terms_.mass_matrix.allFinite()) bad |= input::kMassMatrix;
-    if (!terms_.nonlinear_force.allFinite()) bad |= input::kNonlinearForce;
-    if (!terms_.applied_force.allFinite()) bad |= input::kAppliedForce;
-    if (!terms_.constraint_matrix.allFinite()) bad |= input::kConstraintMatrix;
-    if (!terms_.constraint_rhs.allFinite() || !terms_.constraint_error.allFinite() ||
-        !terms_.constraint_error_rate.allFinite())
+    if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal) {  // read on its diagonal only
+      for (int i = 0; i < N; ++i)
+        if (!std::isfinite(terms_.mass_matrix(i, i))) bad |= input::kMassMatrix;
+    } else if (!all_finite(terms_.mass_matrix.data(), N * N)) {
+      bad |= input::kMassMatrix;
+    }
+    if (!all_finite(terms_.nonlinear_force.data(), N)) bad |= input::kNonlinearForce;
+    if (!all_finite(terms_.applied_force.data(), N)) bad |= input::kAppliedForce;
+    if (!all_finite(terms_.constraint_matrix.data(), P * N)) bad |= input::kConstraintMatrix;
+    if (!all_finite(terms_.constraint_rhs.data(), P) ||
+        !all_finite(terms_.constraint_error.data(), P) ||
+        !all_finite(terms_.constraint_error_rate.data(), P))
       bad |= input::kConstraintRhs;
-    if (!b_.allFinite()) bad |= input::kActuation;
+    if constexpr (ActuatedModel<M>)
+      if (!all_finite(b_.data(), N * K)) bad |= input::kActuation;
     if (bad != 0) return fail(out, Status::kNonFiniteInput, bad);
 
     VectorP correction = VectorP::Zero();
@@ -329,13 +341,20 @@ class ActuatedController {
     // The task rows' C_c^T, and with physical rows: a_p, and C_c^T projected onto the directions
     // the physical rows leave free (the projector is symmetric, so C_c P_n = (P_n C_c^T)^T).
     // An inactive row's column is zero: the SVD below gives its direction up exactly.
-    Eigen::Matrix<Scalar, N, kTask> ctc;
+    // Without physical rows every row is a task row, in order: C_c^T is C^T itself (kept in place).
+    Eigen::Matrix<Scalar, N, kTask> ctc_copy;
+    Eigen::Matrix<Scalar, N, kTask>& ctc = [&]() -> Eigen::Matrix<Scalar, N, kTask>& {
+      if constexpr (kPhysical == 0)
+        return ct;
+      else
+        return ctc_copy;
+    }();
     int active_rows = 0;
     Scalar active_reach2 = Scalar(0);  // ||C_c||_F^2 of the active rows, before any projection
     for (int j = 0; j < kTask; ++j) {
       const int row = kTaskRows[static_cast<std::size_t>(j)];
       if (active_[static_cast<std::size_t>(row)]) {
-        ctc.col(j) = ct.col(row);
+        if constexpr (kPhysical > 0) ctc.col(j) = ct.col(row);
         active_reach2 += ctc.col(j).squaredNorm();
         ++active_rows;
       } else {
@@ -414,15 +433,19 @@ class ActuatedController {
       back = MatrixKK::Identity();
       small_dense::solve_lower_transposed_in_place(weight_factor_, back);  // Lw^-T
     }
-    Eigen::Matrix<Scalar, kTask, K> task;
+    // T^T (K x kTask), the scaled task matrix transposed: one column per task row. Without B it
+    // is C_c^T itself.
+    Eigen::Matrix<Scalar, K, kTask> task_t_storage;
+    const Eigen::Matrix<Scalar, K, kTask>* task_t_ptr = &task_t_storage;
+    bool task_is_ctc = false;
     if constexpr (!ActuatedModel<M>) {
-      if (identity_gauss)
-        task = ctc.transpose();
-      else
-        task = ctc.transpose() * g_dirs;
-    } else {
-      task = ctc.transpose() * g_dirs;
+      if (identity_gauss) {
+        task_t_ptr = &ctc;
+        task_is_ctc = true;
+      }
     }
+    if (!task_is_ctc) task_t_storage.noalias() = g_dirs.transpose() * ctc;
+    const Eigen::Matrix<Scalar, K, kTask>& task_t = *task_t_ptr;
 
     // With Gauss's weight the task's singular values are those of D A^(-1/2) along the actuated
     // directions: they are measured against D A^(-1/2) itself (its Frobenius norm), so that
@@ -453,7 +476,8 @@ class ActuatedController {
           active_rows == kTask) {
         Eigen::Matrix<Scalar, kTask, kTask> gram;
         for (int j = 0; j < kTask; ++j)
-          for (int i = j; i < kTask; ++i) gram(i, j) = gram(j, i) = task.row(i).dot(task.row(j));
+          for (int i = j; i < kTask; ++i)
+            gram(i, j) = gram(j, i) = task_t.col(i).dot(task_t.col(j));
         Scalar norm1 = Scalar(0);  // ||T T^T||_1 >= sigma_max^2
         for (int j = 0; j < kTask; ++j) norm1 = std::max(norm1, gram.col(j).cwiseAbs().sum());
         if (small_dense::all_finite(gram.data(), kTask * kTask) &&
@@ -481,9 +505,9 @@ class ActuatedController {
     bool near_singular = false;
     if (!normal) {
       if constexpr (K >= kTask)
-        w = task.transpose();
+        w = task_t;
       else
-        w = task;
+        w = task_t.transpose();
       if (!small_dense::jacobi_svd_in_place(w.data(), kRows, kCols, sigma.data(), v.data()))
         return fail(out, Status::kNonFiniteResult, 0);
       reach = gauss_weight_ ? std::max(sigma(0), unprojected) : sigma(0);
@@ -519,7 +543,7 @@ class ActuatedController {
       if constexpr (kTask >= 1 && kTask <= K) {
         small_dense::multiply_lower_in_place(gram_l_inv, rhs);             // L_G^-1 R
         small_dense::multiply_lower_transposed_in_place(gram_l_inv, rhs);  // (T T^T)^-1 R
-        parts.noalias() = task.transpose() * rhs;
+        parts.noalias() = task_t * rhs;
       }
     } else if constexpr (K >= kTask) {
       parts.noalias() = w * (inverse.asDiagonal() * (v.transpose() * rhs));  // task^T = w S v^T
@@ -538,7 +562,8 @@ class ActuatedController {
     out.control_feedforward = parts.col(1);
     out.control_stabilizing = parts.col(2);
     out.control = out.control_closed_loop + out.control_feedforward + out.control_stabilizing;
-    if (!out.control.allFinite()) return fail(out, Status::kNonFiniteResult, 0);
+    if (!small_dense::all_finite(out.control.data(), K))
+      return fail(out, Status::kNonFiniteResult, 0);
 
     SolveDiagnostics<Scalar>& d = out.diagnostics;
     d.strategy_used = normal ? InverseStrategy::kCholeskyWithFallback : InverseStrategy::kSvd;
@@ -603,22 +628,26 @@ class ActuatedController {
     if constexpr (kPhysical > 0) project_free(pushed);
     solve_lt(pushed);
     out.acceleration = a + pushed;
-    if (!out.force.allFinite() || !out.acceleration.allFinite())
+    if (!small_dense::all_finite(out.force.data(), N) ||
+        !small_dense::all_finite(out.acceleration.data(), N))
       return fail(out, Status::kNonFiniteResult, 0);
 
     // Which rows are met: |D_i q'' - g_i| against the residual tolerance at the row's own scale.
     const VectorP g = terms_.constraint_rhs + correction;
     out.row_residual = terms_.constraint_matrix * out.acceleration - g;
     const Scalar acceleration2 = out.acceleration.squaredNorm();
+    const VectorP row_norm2 = terms_.constraint_matrix.rowwise().squaredNorm();
+    const Scalar tol2 = options_.solver.residual_tolerance * options_.solver.residual_tolerance;
+    Scalar residual2 = Scalar(0);
     for (int i = 0; i < P; ++i) {
-      const Scalar scale2 =
-          g(i) * g(i) + terms_.constraint_matrix.row(i).squaredNorm() * acceleration2;
-      const Scalar tol = options_.solver.residual_tolerance;
-      const bool met = std::abs(out.row_residual(i)) <= tol * std::sqrt(scale2);  // false for NaN
+      // Squared: |r_i|^2 <= tol^2 (g_i^2 + |D_i|^2 |q''|^2), false for NaN.
+      const Scalar r2 = out.row_residual(i) * out.row_residual(i);
+      residual2 += r2;
+      const bool met = r2 <= tol2 * (g(i) * g(i) + row_norm2(i) * acceleration2);
       if (!met && i < 64 && active_[static_cast<std::size_t>(i)])
         out.unmet_rows |= std::uint64_t{1} << i;
     }
-    d.residual_norm = out.row_residual.norm();
+    d.residual_norm = std::isfinite(residual2) ? std::sqrt(residual2) : out.row_residual.norm();
     if (out.unmet_rows != 0) d.warnings |= warning::kConstraintsNotMet;
     return d.status;
   }
