@@ -58,6 +58,7 @@ template <Model M>
 class ControllerNode {
  public:
   static constexpr int N = M::kDof;
+  static_assert(kActuatorsOf<M> <= kMaxDimension, "a command carries at most 32 actuator commands");
   using Controller = LawFor<M>;  ///< ActuatedController for a model with actuators
   using Scalar = typename Controller::Scalar;
 
