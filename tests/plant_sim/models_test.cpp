@@ -150,29 +150,34 @@ TEST(Models, APlantThatCannotHoldTheModelsPhysicalRowsIsRefused) {
 // at least 10x smaller than stabilization's alone, within the bound it promises at every sample
 // (both runs start on the path), and its force moves no more than 1.5x as much (total variation:
 // no chattering beyond the boundary layer).
+// The robust term's promises on one mismatched scene, against the same scene without it.
+void expect_robust_beats_stabilization(const Scene& scene, const RunResult& robust,
+                                       const RunResult& alone) {
+  ASSERT_GT(scene.tracking.robust_bound, 0.0);
+  ASSERT_TRUE(robust.summary.failure.empty()) << robust.summary.failure;
+  ASSERT_TRUE(alone.summary.failure.empty()) << alone.summary.failure;
+  constexpr auto kSaturated = static_cast<std::size_t>(std::countr_zero(warning::kSaturated));
+  EXPECT_EQ(robust.summary.warnings.by_kind[kSaturated], 0u);  // the same limit, reached by neither
+  EXPECT_EQ(alone.summary.warnings.by_kind[kSaturated], 0u);
+  const double bound = robust_error_bound(
+      Stabilization<double>{scene.tracking.zeta, scene.tracking.stabilization_omega},
+      Robust<double>{scene.tracking.robust_bound, scene.tracking.robust_layer});
+  EXPECT_LE(robust.summary.max_tracking_error, bound);
+  EXPECT_GE(alone.summary.max_tracking_error, 10 * robust.summary.max_tracking_error)
+      << "alone " << alone.summary.max_tracking_error << ", robust "
+      << robust.summary.max_tracking_error;
+  EXPECT_GT(robust.summary.force_total_variation, 0.0);
+  EXPECT_LE(robust.summary.force_total_variation, 1.5 * alone.summary.force_total_variation)
+      << robust.summary.force_total_variation << " against " << alone.summary.force_total_variation;
+}
+
 TEST(Models, TheRobustTermHoldsAMismatchedPlantWithinItsBound) {
   for (const char* name : {"planar_arm_heavy", "duffing_chain8_friction"}) {
     SCOPED_TRACE(name);
     const Scene scene = load_scene(kScenes + "/" + name + ".yaml");
-    ASSERT_GT(scene.tracking.robust_bound, 0.0);
-    const RunResult robust = run_scene(scene);
-    const RunResult alone =
-        run_scene(load_scene(kScenes + "/" + name + ".yaml", {"tracking.robust=null"}));
-    ASSERT_TRUE(robust.summary.failure.empty()) << robust.summary.failure;
-    ASSERT_TRUE(alone.summary.failure.empty()) << alone.summary.failure;
-    constexpr auto kSaturated = static_cast<std::size_t>(std::countr_zero(warning::kSaturated));
-    EXPECT_EQ(robust.summary.warnings.by_kind[kSaturated],
-              0u);  // the same limit, reached by neither
-    EXPECT_EQ(alone.summary.warnings.by_kind[kSaturated], 0u);
-    const double bound = robust_error_bound(
-        Stabilization<double>{scene.tracking.zeta, scene.tracking.stabilization_omega},
-        Robust<double>{scene.tracking.robust_bound, scene.tracking.robust_layer});
-    EXPECT_LE(robust.summary.max_tracking_error, bound);
-    EXPECT_GE(alone.summary.max_tracking_error, 10 * robust.summary.max_tracking_error)
-        << "alone " << alone.summary.max_tracking_error << ", robust "
-        << robust.summary.max_tracking_error;
-    EXPECT_GT(robust.summary.force_total_variation, 0.0);
-    EXPECT_LE(robust.summary.force_total_variation, 1.5 * alone.summary.force_total_variation);
+    expect_robust_beats_stabilization(
+        scene, run_scene(scene),
+        run_scene(load_scene(kScenes + "/" + name + ".yaml", {"tracking.robust=null"})));
   }
 }
 
@@ -188,23 +193,8 @@ TEST(Models, TheRobustTermHoldsTheHeavierTetheredPuckWithinItsBound) {
   with_robust.push_back("tracking.robust={bound: 1.0, layer: 0.002}");
   const Scene scene = load_scene(path, with_robust);
   ASSERT_EQ(scene.plant_parameters.size(), 1u);  // the plant's mass differs from the model's
-  const RunResult robust = run_scene(scene, o);
-  const RunResult alone = run_scene(load_scene(path, limit), o);
-  ASSERT_TRUE(robust.summary.failure.empty()) << robust.summary.failure;
-  ASSERT_TRUE(alone.summary.failure.empty()) << alone.summary.failure;
-  constexpr auto kSaturated = static_cast<std::size_t>(std::countr_zero(warning::kSaturated));
-  EXPECT_EQ(robust.summary.warnings.by_kind[kSaturated], 0u);
-  EXPECT_EQ(alone.summary.warnings.by_kind[kSaturated], 0u);
-  const double bound = robust_error_bound(
-      Stabilization<double>{scene.tracking.zeta, scene.tracking.stabilization_omega},
-      Robust<double>{scene.tracking.robust_bound, scene.tracking.robust_layer});
-  EXPECT_LE(robust.summary.max_tracking_error, bound);
-  EXPECT_GE(alone.summary.max_tracking_error, 10 * robust.summary.max_tracking_error)
-      << "alone " << alone.summary.max_tracking_error << ", robust "
-      << robust.summary.max_tracking_error;
-  EXPECT_GT(robust.summary.force_total_variation, 0.0);
-  EXPECT_LE(robust.summary.force_total_variation, 1.5 * alone.summary.force_total_variation)
-      << robust.summary.force_total_variation << " against " << alone.summary.force_total_variation;
+  expect_robust_beats_stabilization(scene, run_scene(scene, o),
+                                    run_scene(load_scene(path, limit), o));
 }
 
 TEST(Models, PointMassChainEqualsTheChainModelAsItsOwnPlant) {
