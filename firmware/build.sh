@@ -3,7 +3,8 @@
 # usage: firmware/build.sh TARGET LAW OUT_DIR
 #   TARGET  m4 (Cortex-M4F, single-precision FPU, float; QEMU mps2-an386)
 #           m7 (Cortex-M7, double-precision FPU, double; QEMU mps2-an500)
-#   LAW     duffing | arm | closed_form | duffing_held | arm_held | cart_pole | arm_passive_wrist
+#   LAW     duffing | arm | closed_form | duffing_held | arm_held | cart_pole | arm_passive_wrist |
+#           differential_drive
 # Extra compiler flags may be passed in FIRMWARE_EXTRA_FLAGS (e.g. -DFIRMWARE_ALLOCATE).
 # Writes OUT_DIR/TARGET_LAW.elf, its map, the -fstack-usage and -fcallgraph-info files.
 # These are the flags a firmware project copies: C++20, no exceptions, no RTTI, no math errno,
@@ -25,7 +26,8 @@ case "$law" in
   arm_held) law_enum=kArmHeld ;;
   cart_pole) law_enum=kCartPole ;;
   arm_passive_wrist) law_enum=kArmPassiveWrist ;;
-  *) echo "unknown law $law (duffing, arm, closed_form, duffing_held, arm_held, cart_pole, arm_passive_wrist)" >&2; exit 2 ;;
+  differential_drive) law_enum=kDifferentialDrive ;;
+  *) echo "unknown law $law (duffing, arm, closed_form, duffing_held, arm_held, cart_pole, arm_passive_wrist, differential_drive)" >&2; exit 2 ;;
 esac
 mkdir -p "$out"
 name="${target}_${law}"

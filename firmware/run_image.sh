@@ -16,7 +16,7 @@ case "$target" in
   m4) machine=mps2-an386 width=4 ;;
   m7) machine=mps2-an500 width=8 ;;
 esac
-n=2; case "$law" in arm*) n=3 ;; esac
+n=2; case "$law" in arm* | differential_drive) n=3 ;; esac
 # -icount shift=0: one instruction per virtual nanosecond, SysTick at 25 MHz (40 instructions a
 # tick); the loop sleeps (WFI) between periods, so 10 s of loop take about 10 s.
 status=0

@@ -1,6 +1,6 @@
 // The host's run of the firmware loop (loop.hpp) in double precision: the reference the target's
-// trajectory is compared with. usage: firmware_reference duffing|arm|closed_form|duffing_held|arm_held|cart_pole|arm_passive_wrist OUT.bin
-// Writes per period t, q, q', u as float64 in the target's layout.
+// trajectory is compared with. usage: firmware_reference duffing|arm|closed_form|duffing_held|arm_held|cart_pole|arm_passive_wrist|differential_drive
+// OUT.bin. Writes per period t, q, q', u as float64 in the target's layout.
 #include <cstdio>
 #include <cstring>
 #include <vector>
@@ -35,7 +35,7 @@ int run(const char* path) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 3) return std::fprintf(stderr, "usage: %s duffing|arm|closed_form|duffing_held|arm_held|cart_pole|arm_passive_wrist OUT.bin\n", argv[0]), 2;
+  if (argc != 3) return std::fprintf(stderr, "usage: %s duffing|arm|closed_form|duffing_held|arm_held|cart_pole|arm_passive_wrist|differential_drive OUT.bin\n", argv[0]), 2;
   if (!std::strcmp(argv[1], "duffing")) return run<firmware::Law::kDuffing>(argv[2]);
   if (!std::strcmp(argv[1], "arm")) return run<firmware::Law::kArm>(argv[2]);
   if (!std::strcmp(argv[1], "closed_form")) return run<firmware::Law::kClosedForm>(argv[2]);
@@ -43,5 +43,6 @@ int main(int argc, char** argv) {
   if (!std::strcmp(argv[1], "arm_held")) return run<firmware::Law::kArmHeld>(argv[2]);
   if (!std::strcmp(argv[1], "cart_pole")) return run<firmware::Law::kCartPole>(argv[2]);
   if (!std::strcmp(argv[1], "arm_passive_wrist")) return run<firmware::Law::kArmPassiveWrist>(argv[2]);
+  if (!std::strcmp(argv[1], "differential_drive")) return run<firmware::Law::kDifferentialDrive>(argv[2]);
   return std::fprintf(stderr, "unknown law %s\n", argv[1]), 2;
 }

@@ -13,6 +13,10 @@
 //                0.4 sin(3 t), 2 x 1 with K = 1 (docs/actuation.md)
 //   kArmPassiveWrist  ActuatedController<PlanarArmPassiveWrist>: the arm's hand on its circle with
 //                motors at the shoulder and the elbow alone, 3 x 2 with K = 2
+//   kDifferentialDrive  ActuatedController<DifferentialDrive>: a point ahead of the axle on the
+//                figure-eight, drive force and yaw torque (K = 2), the no-slip row physical: the
+//                law leaves it to the plant, and the plant here holds it (its constrained
+//                acceleration, eq. 31, with the row's velocity error damped against RK4's drift)
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -24,12 +28,13 @@
 #include "gausstrack/consistent_state.hpp"
 #include "gausstrack/systems/cart_pole.hpp"
 #include "gausstrack/systems/coupled_duffing.hpp"
+#include "gausstrack/systems/differential_drive.hpp"
 #include "gausstrack/systems/planar_arm.hpp"
 #include "gausstrack/tracking_controller.hpp"
 
 namespace firmware {
 
-enum class Law { kDuffing, kArm, kClosedForm, kDuffingHeld, kArmHeld, kCartPole, kArmPassiveWrist };
+enum class Law { kDuffing, kArm, kClosedForm, kDuffingHeld, kArmHeld, kCartPole, kArmPassiveWrist, kDifferentialDrive };
 
 template <Law L>
 constexpr bool is_arm() {
@@ -53,13 +58,17 @@ template <typename S>
 struct ModelOf<Law::kCartPole, S> {
   using type = gausstrack::systems::CartPole<S>;
 };
+template <typename S>
+struct ModelOf<Law::kDifferentialDrive, S> {
+  using type = gausstrack::systems::DifferentialDrive<S>;
+};
 
 inline constexpr int kPeriods = 10000;  // 10 s at 1 kHz
 inline constexpr double kPeriod = 1e-3;  // [s]
 
 template <Law L>
 constexpr int dof() {
-  return is_arm<L>() ? 3 : 2;
+  return is_arm<L>() || L == Law::kDifferentialDrive ? 3 : 2;
 }
 
 /// One law and its plant, in scalar type S.
@@ -75,6 +84,10 @@ class Loop {
       q_ << S(0.2), S(0.9), S(0.6);
       qd_.setZero();
       gausstrack::make_consistent(model_, q_, qd_, S(0), S(1e-6));
+    } else if constexpr (L == Law::kDifferentialDrive) {
+      // differential_drive.yaml's start: 0.14 m off the path, at rest, heading 45 deg.
+      q_ << S(-0.312), S(-0.112), S(0.7853981633974483);
+      qd_.setZero();
     } else if constexpr (L == Law::kCartPole) {
       q_ << S(0), S(0);  // on the trajectory: theta = 0, theta' = 1.2
       qd_ << S(0), S(1.2);
@@ -137,6 +150,17 @@ class Loop {
   // The plant's own dynamics: A q'' + f = Q + u (the same model as the law's: no mismatch, so the
   // float run differs from the double one by rounding alone).
   void acceleration(const Vector& q, const Vector& qd, const Vector& u, S t, Vector& qdd) {
+    if constexpr (L == Law::kDifferentialDrive) {
+      // A diagonal, one physical row d q'' = g_p: q'' = a + A^-1 d^T (g_p - k psi - d a) / (d A^-1 d^T).
+      gausstrack::evaluate_model(model_, q, qd, t, terms_);
+      const Vector inverse_mass = terms_.mass_matrix.diagonal().cwiseInverse();
+      const Vector a = (terms_.applied_force + u - terms_.nonlinear_force).cwiseProduct(inverse_mass);
+      const auto d = terms_.constraint_matrix.row(2).transpose();
+      const S target = terms_.constraint_rhs(2) - kPlantRowDamping * terms_.constraint_error_rate(2);
+      const S multiplier = (target - d.dot(a)) / d.cwiseProduct(inverse_mass).dot(d);
+      qdd = a + multiplier * d.cwiseProduct(inverse_mass);
+      return;
+    }
     model_.evaluate(q, qd, t, terms_);
     const Vector rhs = terms_.applied_force + u - terms_.nonlinear_force;
     if constexpr (is_arm<L>() || L == Law::kCartPole) {
@@ -146,6 +170,7 @@ class Loop {
     }
   }
 
+  static constexpr S kPlantRowDamping = S(50);  // [1/s]: the plant's slip velocity decays as e^(-50 t)
   Model model_{};
   std::conditional_t<L == Law::kClosedForm, NoLaw, LibraryLaw> law_{};
   gausstrack::TermsOf<Model> terms_{};

@@ -12,7 +12,7 @@
 #include "loop.hpp"
 
 #ifndef FIRMWARE_LAW
-#error "define FIRMWARE_LAW as firmware::Law::kDuffing, kArm, kClosedForm, kDuffingHeld, kArmHeld, kCartPole or kArmPassiveWrist"
+#error "define FIRMWARE_LAW as firmware::Law::kDuffing, kArm, kClosedForm, kDuffingHeld, kArmHeld, kCartPole, kArmPassiveWrist or kDifferentialDrive"
 #endif
 #ifndef FIRMWARE_TRAJECTORY
 #define FIRMWARE_TRAJECTORY "trajectory.bin"

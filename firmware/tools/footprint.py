@@ -8,7 +8,7 @@ import os
 import sys
 
 TARGETS = {"m4": "Cortex-M4F (float, mps2-an386)", "m7": "Cortex-M7 (double, mps2-an500)"}
-LAWS = ("duffing", "duffing_held", "arm", "arm_held", "cart_pole", "arm_passive_wrist", "closed_form")
+LAWS = ("duffing", "duffing_held", "arm", "arm_held", "cart_pole", "arm_passive_wrist", "differential_drive", "closed_form")
 
 
 def main():

@@ -118,6 +118,7 @@ int run_plant(const PlantProcessOptions& o, const plant_sim::Scene& scene, plant
   const ProcessOptions& p = o.process;
   PlantNodeOptions node_options = o.node;
   node_options.rate_hz = scene.control_rate;
+  node_options.actuators = scene.actuators();
   node_options.periods = static_cast<std::size_t>(std::ceil(scene.duration * scene.control_rate)) + 16;
   // The log's writer before the real-time options, LCM (and its receive thread) after them.
   const auto log = open_message_log(p.log_path);

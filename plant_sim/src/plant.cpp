@@ -220,7 +220,7 @@ double Plant::constraint_residual(const V& q, const V& qd, double t) {
   return worst;
 }
 
-Control::Control(const Scene& s, const RunOptions& o) {
+Control::Control(const Scene& s, const RunOptions& o) : actuators_(s.actuators()) {
   if (!s.tracking.enabled) return;
   const ModelFactory& model = find_model(o, s.tracking.model, s.tracking.where);
   if (model.dof != s.dof())
@@ -242,6 +242,11 @@ Control::Control(const Scene& s, const RunOptions& o) {
                                               : " ('" + s.plant_model + "' declares " +
                                                     std::to_string(plant->physical_rows) + ")"));
   }
+  // A plant driven through its own actuators holds u: the model's B must have one column each.
+  if (s.actuators() > 0 && s.actuators() != model.actuators)
+    throw SceneError(s.engine.where + ": the plant's actuators (plant.actuators) are " +
+                     std::to_string(s.actuators()) + ", model '" + s.tracking.model + "' has " +
+                     std::to_string(model.actuators) + ": the controller's u drives them one to one");
   if (o.sampled_control)
     error_ = model.tracking_error(s.tracking);
   else {
@@ -253,16 +258,17 @@ Control::Control(const Scene& s, const RunOptions& o) {
 }
 
 void Control::force(const V& q, const V& qd, double t, RunSummary& stats, V& u) {
-  u.setZero(q.size());
+  u.setZero(q.size() + actuators_);
   if (!law_) return;
   ++stats.control_evaluations;
   if (failed(law_->compute(q.data(), qd.data(), t, u.data()))) {
     ++stats.control_failures;
     stats.warnings.add_failure();
     u.setZero();
-  } else {
-    stats.warnings.add(law_->warnings());
+    return;
   }
+  stats.warnings.add(law_->warnings());
+  if (actuators_ > 0) u.tail(actuators_) = Eigen::Map<const V>(law_->control(), actuators_);
 }
 
 double Control::tracking_error(const V& q, const V& qd, double t) const {

@@ -93,13 +93,15 @@ class Plant {
 class Control {
  public:
   Control(const Scene& s, const RunOptions& o);
-  /// u = the law's force at (q, q', t); zero without a law or on failure.
+  /// u = the law's command at (q, q', t): its force, then (for a plant driven through its
+  /// actuators, plant.actuators) its control; zero without a law or on failure.
   void force(const V& q, const V& qd, double t, RunSummary& stats, V& u);
   double tracking_error(const V& q, const V& qd, double t) const;
 
  private:
   std::unique_ptr<ControlLaw> law_;
   std::function<double(const double*, const double*, double)> error_;
+  int actuators_ = 0;
 };
 
 }  // namespace gausstrack::plant_sim::detail

@@ -49,7 +49,8 @@ class Run {
   Control control_;
   std::unique_ptr<PlantEngine> engine_;
   const bool sampled_, project_;
-  // Sampled control: the period and the force held over it. Continuous: one segment.
+  // Sampled control: the period and the command held over it (the force, then the control of
+  // an engine's actuators). Continuous: one segment.
   const double period_;
   V held_;
   // Work vectors sized once: the right-hand side and the sampled measurement allocate nothing
@@ -71,7 +72,7 @@ Run::Run(const Scene& s, const RunOptions& o)
       sampled_(s.control_mode == ControlMode::kSampled),
       project_(s.projection && plant_.has_constraints()),
       period_(sampled_ ? 1.0 / s.control_rate : s.duration),
-      held_(V::Zero(n_)),
+      held_(V::Zero(s.command_size())),
       rhs_q_(n_), rhs_qd_(n_), rhs_u_(n_), rhs_qdd_(n_), measured_q_(n_), measured_qd_(n_),
       x_(2 * n_), scratch_(2 * n_),
       sample_count_(static_cast<std::size_t>(std::floor(s.duration / s.output_period + 1e-9)) + 1) {
@@ -136,7 +137,8 @@ bool Run::hold_force(std::int64_t period, double t0) {
     held_.setZero();
     const auto n = static_cast<std::size_t>(n_);
     if (!o_.sampled_control(period, t0, std::span<const double>(measured_q_.data(), n),
-                            std::span<const double>(measured_qd_.data(), n), std::span<double>(held_.data(), n))) {
+                            std::span<const double>(measured_qd_.data(), n),
+                            std::span<double>(held_.data(), static_cast<std::size_t>(held_.size())))) {
       stats_.stopped_early = true;
       return false;
     }

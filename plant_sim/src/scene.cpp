@@ -185,6 +185,15 @@ void read_engine(const Reader& plant, Scene& s) {
       if (std::find(e.effects.begin(), e.effects.end(), name) != e.effects.end()) r.fail("listed twice");
       e.effects.push_back(name);
     }
+  if (plant.has("actuators"))
+    for (const Reader& r : plant.items("actuators")) {
+      if (!r.node().IsScalar() || r.node().Scalar().empty()) r.fail("must be the name of one of the model's actuators");
+      const std::string name = r.node().Scalar();
+      if (std::find(e.actuators.begin(), e.actuators.end(), name) != e.actuators.end()) r.fail("listed twice");
+      e.actuators.push_back(name);
+    }
+  if (e.actuators.size() > static_cast<std::size_t>(kMaxCoordinates))
+    plant.child("actuators").fail("at most " + std::to_string(kMaxCoordinates) + " actuators");
 }
 
 bool names_engine(const Reader& plant) {
@@ -275,7 +284,7 @@ void read_effects_and_constraints(const Reader& plant, Scene& s) {
 void read_plant(const Reader& plant, Scene& s) {
   const bool engine = names_engine(plant);
   if (engine)
-    plant.allow_only({"engine", "model", "coordinates", "timestep", "integrator", "effects", "initial"});
+    plant.allow_only({"engine", "model", "coordinates", "timestep", "integrator", "effects", "actuators", "initial"});
   else
     plant.allow_only(
         {"engine", "coordinates", "masses", "model", "parameters", "initial", "effects", "constraints", "projection"});
@@ -365,6 +374,13 @@ Scene read_scene(const Reader& root) {
       if (f->dof != s.dof())
         root.child("tracking").child("model").fail("model '" + s.tracking.model + "' has " + std::to_string(f->dof) +
                                                    " coordinates, the plant has " + std::to_string(s.dof()));
+    if (s.actuators() > 0)
+      if (const ModelFactory* f = find_builtin_model(s.tracking.model); f != nullptr && f->actuators != s.actuators())
+        root.child("plant").child("actuators").fail(
+            "names " + std::to_string(s.actuators()) + " actuator(s); model '" + s.tracking.model + "' has " +
+            (f->actuators == 0 ? std::string("no actuation matrix B (it commands a generalized force)")
+                               : std::to_string(f->actuators) + " actuators") +
+            ": the controller's u drives them one to one");
     if (!s.constraints.empty())
       root.child("tracking").fail("tracking control of a plant with physical constraints is not supported");
   }

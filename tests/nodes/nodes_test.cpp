@@ -531,6 +531,35 @@ TEST_F(PlantFixture, LockstepAppliesTheAnswerAndZeroForAFailedSolve) {
   EXPECT_EQ(node.counts().commands_failed, 1);
 }
 
+// A plant driven through its own actuators (plant.actuators) holds the force, then u: a command
+// must carry one control per actuator (a failed one none, and zero is held).
+TEST_F(PlantFixture, ActuatedPlantHoldsTheControlAfterTheForce) {
+  PlantNodeOptions o = options(true);
+  o.actuators = 1;
+  PlantNode node(lcm, states, "CMD", 2, o);
+  int replies = 0;
+  fake.reply = [&](const plant_state_t& s, control_command_t& c) {
+    ++replies;
+    c.force[0] = 1.0, c.force[1] = -2.0;
+    c.actuators = (s.sequence == 1 && replies == 2) ? 0 : 1;  // state 1's first answer lacks u
+    c.control[0] = 7.0 + static_cast<double>(s.sequence);
+    if (s.sequence == 2) c.status = 3, c.actuators = 0;
+  };
+  const std::array<double, 2> q{0.1, 0.2}, qd{0, 0};
+  std::array<double, 3> u{};
+  ASSERT_TRUE(node.exchange(0, 0.0, q, qd, u));
+  EXPECT_EQ(u, (std::array<double, 3>{1.0, -2.0, 7.0}));
+  ASSERT_TRUE(node.exchange(1, 0.005, q, qd, u));  // the resent state's answer carries u
+  EXPECT_EQ(u, (std::array<double, 3>{1.0, -2.0, 8.0}));
+  EXPECT_EQ(node.counts().wrong_dimension, 1);
+  ASSERT_TRUE(node.exchange(2, 0.010, q, qd, u));
+  EXPECT_EQ(u, (std::array<double, 3>{0.0, 0.0, 0.0}));
+  EXPECT_EQ(node.counts().commands_failed, 1);
+  // A command span without room for the control stops the run.
+  std::array<double, 2> force_only{};
+  EXPECT_FALSE(node.exchange(3, 0.015, q, qd, force_only));
+}
+
 // The hold's delay each state reports (what the controller's sampled-data hold predicts over):
 // none in lock-step; in real time none for the first state (its answer is awaited), then the
 // period (an answer acts from the next period), as measured from the applied commands.

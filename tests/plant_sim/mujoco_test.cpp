@@ -118,6 +118,49 @@ TEST(MujocoCrossCheck, CoordinatesFollowTheScenesJointOrder) {
   }
 }
 
+TEST(MujocoCrossCheck, MotorsActuatorMomentsAreTheModelsB) {
+  // arm3_motors.xml's two <motor>s against systems::PlanarArmPassiveWrist's B at random states:
+  // MuJoCo's actuator_moment times the gain is the generalized force per unit control.
+  EngineSpec motors = spec(kModels + "/arm3_motors.xml", {"gravity"});
+  motors.actuators = {"shoulder_motor", "elbow_motor"};
+  MujocoModel mj(motors, {"shoulder", "elbow", "wrist"});
+  ASSERT_EQ(mj.actuators(), 2);
+  systems::PlanarArmPassiveWrist<double> arm;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> angle(-3.0, 3.0), rate(-3.0, 3.0);
+  for (int trial = 0; trial < 50; ++trial) {
+    Eigen::Vector3d q, qd;
+    for (int i = 0; i < 3; ++i) q(i) = angle(rng), qd(i) = rate(rng);
+    mj.set_state(q.data(), qd.data());
+    Eigen::Matrix<double, 3, 2> b_mujoco, b_model;
+    mj.actuation_matrix(b_mujoco.data());
+    arm.actuation(q, 0.0, b_model);
+    ASSERT_LE((b_mujoco - b_model).norm(), 1e-15) << "trial " << trial << "\nmujoco\n" << b_mujoco;
+  }
+  // And they act: a step under control u equals a step under the force B u applied to the joints
+  // (the arm without motors), and the command's force entries are not applied on top of it.
+  MujocoModel joints(spec(kModels + "/arm3.xml", {"gravity"}), {"shoulder", "elbow", "wrist"});
+  const double q[3] = {0.3, -0.7, 1.1}, qd[3] = {0.5, 1.5, -2.0};
+  mj.set_state(q, qd);
+  joints.set_state(q, qd);
+  const double command[5] = {100.0, -100.0, 100.0, 2.5, -1.25};  // a force ignored, then u
+  const double force[3] = {2.5, -1.25, 0.0};
+  double after[6], expected[6];
+  for (int k = 0; k < 10; ++k) {
+    ASSERT_EQ(mj.step(command), "");
+    ASSERT_EQ(joints.step(force), "");
+  }
+  mj.state(after, after + 3);
+  joints.state(expected, expected + 3);
+  for (int i = 0; i < 6; ++i) EXPECT_NEAR(after[i], expected[i], 1e-14) << i;
+  mj.set_state(q, qd);
+  const double idle[5] = {0, 0, 0, 0, 0};
+  for (int k = 0; k < 10; ++k) ASSERT_EQ(mj.step(idle), "");
+  double still[6];
+  mj.state(still, still + 3);
+  EXPECT_GT(std::abs(still[3] - after[3]), 1e-6);  // the control did move the arm
+}
+
 TEST(MujocoEffects, UnlistedEffectsChangeNothingBitForBit) {
   const std::vector<std::string> shorter = {"duration=1.0"};
   const RunResult plain = run("planar_arm_mujoco.yaml", shorter);
@@ -188,6 +231,30 @@ TEST(MujocoClosedLoop, ArmTracksTheCircleAsItsOwnModelDoes) {
   EXPECT_LT(worst, 1e-7);  // RK4 at 0.1 ms over 10 s (1.4e-8 here)
   EXPECT_LT(r.summary.max_tracking_error, 5e-4);  // 0.3 mm: the 1 kHz hold on a circle of 0.3 m
   EXPECT_NEAR(r.summary.max_tracking_error, own.summary.max_tracking_error, 1e-3 * own.summary.max_tracking_error);
+}
+
+TEST(MujocoClosedLoop, PassiveWristTracksThroughMujocosOwnMotors) {
+  // The controller's u drives MuJoCo's two motors; the wrist has none. The same loop closed on
+  // plant_sim's integration of the arm under the force B u gives the same motion.
+  const RunResult r = run("planar_arm_passive_wrist_mujoco.yaml");
+  ASSERT_TRUE(r.summary.failure.empty()) << r.summary.failure;
+  EXPECT_EQ(r.summary.control_failures, 0u);
+  EXPECT_EQ(r.summary.steps, 100000u);
+  const RunResult own = run_scene(load_scene(kScenes + "/planar_arm_passive_wrist.yaml",
+                                             {"control={mode: sampled, rate: 1000}", "integrator.tolerance=1e-12"}));
+  ASSERT_TRUE(own.summary.failure.empty()) << own.summary.failure;
+  ASSERT_EQ(r.samples.size(), own.samples.size());
+  double worst = 0, wrist_force = 0, wrist_swing = 0;
+  for (std::size_t k = 0; k < own.samples.size(); ++k) {
+    for (std::size_t i = 0; i < 3; ++i) worst = std::max(worst, std::abs(r.samples[k].q[i] - own.samples[k].q[i]));
+    wrist_force = std::max(wrist_force, std::abs(r.samples[k].u[2]));
+    wrist_swing = std::max(wrist_swing, std::abs(r.samples[k].q[2] - r.samples[0].q[2]));
+  }
+  EXPECT_LT(worst, 1e-6);
+  EXPECT_EQ(wrist_force, 0.0);   // B u has no wrist torque
+  EXPECT_GT(wrist_swing, 0.1);   // and the wrist does move, unactuated
+  EXPECT_LT(r.summary.max_tracking_error, 1e-3);
+  EXPECT_NEAR(r.summary.max_tracking_error, own.summary.max_tracking_error, 1e-2 * own.summary.max_tracking_error);
 }
 
 TEST(MujocoClosedLoop, CartDoublePendulumTracks) {
@@ -263,6 +330,25 @@ TEST(MujocoScenes, BadEngineScenesAreRefusedWithTheirReason) {
   EXPECT_NE(error_of({"plant.integrator=implicitfast"}).find("unknown integrator"), std::string::npos);
   EXPECT_NE(error_of({"plant.masses=[1, 1, 1]"}).find("unknown key"), std::string::npos);
   EXPECT_NE(error_of({"plant.coordinates=[shoulder, elbow, elbow]"}).find("duplicate coordinate"), std::string::npos);
+  // Actuators: each must exist and be a motor, all must be named, and the controller's u must
+  // have one entry per actuator.
+  auto wrist_error_of = [](const std::vector<std::string>& sets) -> std::string {
+    try {
+      run("planar_arm_passive_wrist_mujoco.yaml", sets);
+    } catch (const SceneError& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  EXPECT_NE(wrist_error_of({"plant.actuators=[shoulder_motor, wrist_motor]"}).find("no actuator named 'wrist_motor'"),
+            std::string::npos);
+  EXPECT_NE(wrist_error_of({"plant.actuators=[shoulder_motor]", "tracking=null"}).find("has 2 actuators; the scene names 1"),
+            std::string::npos);
+  EXPECT_NE(wrist_error_of({"tracking.model=planar_arm"}).find("no actuation matrix B"), std::string::npos);
+  EXPECT_NE(wrist_error_of({"plant.model=" + kTestModels + "/arm3_servo.xml"}).find("'elbow_motor' is not a motor"),
+            std::string::npos);
+  EXPECT_NE(wrist_error_of({"plant.actuators=[shoulder_motor, shoulder_motor]"}).find("listed twice"), std::string::npos);
+  EXPECT_NE(error_of({"plant.actuators=[shoulder_motor]", "tracking=null"}).find("no actuator named"), std::string::npos);
   // The model class itself refuses a joint named twice (the other would get no force).
   try {
     MujocoModel twice(spec(kModels + "/arm3.xml", {}), {"shoulder", "shoulder", "wrist"});

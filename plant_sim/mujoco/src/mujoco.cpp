@@ -94,8 +94,11 @@ void MujocoModel::configure(const EngineSpec& spec, const std::vector<std::strin
   // Only the listed effects: the disable flags for whole features, the model's own fields where
   // one flag covers two effects (PASSIVE is springs and dampers together) or none exists.
   const int physical = mjDSBL_CONSTRAINT | mjDSBL_EQUALITY | mjDSBL_FRICTIONLOSS | mjDSBL_LIMIT | mjDSBL_CONTACT |
-                       mjDSBL_PASSIVE | mjDSBL_GRAVITY | mjDSBL_ACTUATION;
-  int off = mjDSBL_ACTUATION;  // the command is a generalized force; the model's actuators never act
+                       mjDSBL_PASSIVE | mjDSBL_GRAVITY | mjDSBL_ACTUATION | mjDSBL_CLAMPCTRL;
+  configure_actuators(spec);
+  // The command is a generalized force unless the scene names actuators: then they act (and only
+  // they), under the command's control, unclamped (the law's u is held as it is).
+  int off = actuator_ids_.empty() ? mjDSBL_ACTUATION : mjDSBL_CLAMPCTRL;
   if (!listed(spec, "gravity")) off |= mjDSBL_GRAVITY;
   if (!listed(spec, "contact")) off |= mjDSBL_CONTACT;
   if (!listed(spec, "frictionloss")) off |= mjDSBL_FRICTIONLOSS;
@@ -136,7 +139,38 @@ void MujocoModel::configure(const EngineSpec& spec, const std::vector<std::strin
   set_state(zero.data(), std::vector<double>(joints.size(), 0.0).data());
 }
 
+// plant.actuators: each a motor (force = gain * ctrl along its transmission, no activation
+// dynamics, no bias), so that the generalized force is B u with B = actuator_moment^T * gain; the
+// model's every actuator is named, in the order of the controller's u.
+void MujocoModel::configure_actuators(const EngineSpec& spec) {
+  auto fail = [&](const std::string& why) { throw SceneError(spec.model_path + ": " + why); };
+  if (spec.actuators.empty()) return;
+  for (const std::string& name : spec.actuators) {
+    const int a = mj_name2id(m_, mjOBJ_ACTUATOR, name.c_str());
+    if (a < 0) fail("has no actuator named '" + name + "' (the scene's plant.actuators are the model's actuators)");
+    if (m_->actuator_dyntype[a] != mjDYN_NONE || m_->actuator_gaintype[a] != mjGAIN_FIXED ||
+        m_->actuator_biastype[a] != mjBIAS_NONE)
+      fail("actuator '" + name + "' is not a motor (a <motor>: no activation dynamics, a fixed gain, no bias), so "
+           "its force is not B u");
+    actuator_ids_.push_back(a);
+  }
+  if (m_->nu != static_cast<int>(spec.actuators.size()))
+    fail("has " + std::to_string(m_->nu) + " actuators; the scene names " + std::to_string(spec.actuators.size()) +
+         " (name every actuator, in the order of the controller's u)");
+}
+
 MujocoModel::~MujocoModel() { release(); }
+
+void MujocoModel::actuation_matrix(double* B) const {
+  const int nv = m_->nv;
+  const int k = actuators();
+  for (int j = 0; j < k; ++j) {
+    const int a = actuator_ids_[static_cast<std::size_t>(j)];
+    for (int i = 0; i < dof(); ++i)
+      B[j * dof() + i] = d_->actuator_moment[a * nv + dof_index_[static_cast<std::size_t>(i)]] *
+                         m_->actuator_gainprm[a * mjNGAIN];
+  }
+}
 
 void MujocoModel::set_state(const double* q, const double* qd, double t) {
   for (int i = 0; i < dof(); ++i) {
@@ -172,7 +206,12 @@ void MujocoModel::bias_minus_passive(double* r) const {
 }
 
 std::string MujocoModel::step(const double* u) {
-  for (int i = 0; i < dof(); ++i) d_->qfrc_applied[dof_index_[static_cast<std::size_t>(i)]] = u[i];
+  if (actuator_ids_.empty()) {
+    for (int i = 0; i < dof(); ++i) d_->qfrc_applied[dof_index_[static_cast<std::size_t>(i)]] = u[i];
+  } else {
+    // The actuators' control acts; the command's force (the controller's B u) is what it gives.
+    for (int j = 0; j < actuators(); ++j) d_->ctrl[actuator_ids_[static_cast<std::size_t>(j)]] = u[dof() + j];
+  }
   int before[std::size(kResetWarnings)];
   for (std::size_t k = 0; k < std::size(kResetWarnings); ++k) before[k] = d_->warning[kResetWarnings[k].index].number;
   if (!failure_.empty()) return failure_;

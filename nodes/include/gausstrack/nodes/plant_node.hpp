@@ -169,6 +169,9 @@ struct PlantNodeOptions {
   int timeout_ms = 2000;       ///< lock-step: longest wait for a command
   int watchdog_ms = 50;        ///< real time: safe action after this long without a command
   bool safe_hold = false;      ///< safe action: hold the last force (else zero)
+  /// The plant's actuators driven by the command's control (plant.actuators): a command must carry
+  /// that many, and the command held is the force followed by them. 0: the force alone.
+  int actuators = 0;
   std::size_t periods = 1 << 16;  ///< periods to keep latency figures for
   std::int64_t run_id = 0;     ///< 0: chosen at random
 };
@@ -198,10 +201,14 @@ class PlantNode {
         answered_sequences_(o.periods), deadline_work_us_(o.periods), hold_lag_periods_(o.periods),
         applied_states_(o.periods) {
     run_id_ = o.run_id != 0 ? o.run_id : random_run_id();
-    hold_ = Vector::Zero(dimension);
+    if (o.actuators < 0 || o.actuators > kMaxDimension)
+      throw std::invalid_argument("PlantNode: " + std::to_string(o.actuators) + " actuators is not in 0..32");
+    const int held = dimension + o.actuators;
+    hold_ = Vector::Zero(held);
     incoming_force_ = Vector::Zero(dimension);
-    latest_force_ = Vector::Zero(dimension);
-    answers_ = Eigen::MatrixXd::Zero(dimension, kAnswerSlots);
+    incoming_command_ = Vector::Zero(held);
+    latest_force_ = Vector::Zero(held);
+    answers_ = Eigen::MatrixXd::Zero(held, kAnswerSlots);
     answer_sequence_.fill(-1);
     subscription_ = lcm_.subscribe(command_channel, &PlantNode::on_command, this);
   }
@@ -217,13 +224,15 @@ class PlantNode {
   PlantNode& operator=(const PlantNode&) = delete;
 
   /// Called at the start of control period `period` with the state: publishes it and writes the
-  /// force to hold over the period into u. Returns false to stop the run (a stop was requested,
+  /// command to hold over the period into u (the force, then the actuators' control). Returns false to stop the run (a stop was requested,
   /// or in lock-step no command came within the timeout).
   bool exchange(std::int64_t period, double t, std::span<const double> q, std::span<const double> qd,
                 std::span<double> u) noexcept {
     const int n = codec_.dimension();
+    const int held = n + o_.actuators;
     const auto sn = static_cast<std::size_t>(n);
-    if (g_stop_requested || q.size() != sn || qd.size() != sn || u.size() != sn) return false;
+    if (g_stop_requested || q.size() != sn || qd.size() != sn || u.size() != static_cast<std::size_t>(held))
+      return false;
     if (!started_) {
       // The clock starts with the run, not with the node's construction.
       started_ = true;
@@ -271,7 +280,7 @@ class PlantNode {
       tally_held_answer();
       hold_lag_periods_.add(lag);
       applied_states_.add(static_cast<double>(last_applied_));
-      for (int i = 0; i < n; ++i) u[static_cast<std::size_t>(i)] = hold_(i);
+      for (int i = 0; i < held; ++i) u[static_cast<std::size_t>(i)] = hold_(i);
       awaited_ = period;
       exact_ = false;
       publish_state(period, t, q, qd);
@@ -294,7 +303,7 @@ class PlantNode {
     held_warnings_ = latest_warnings_;
     held_answer_ = true;
     tally_held_answer();
-    for (int i = 0; i < n; ++i) u[static_cast<std::size_t>(i)] = latest_failed_ ? 0.0 : latest_force_(i);
+    for (int i = 0; i < held; ++i) u[static_cast<std::size_t>(i)] = latest_failed_ ? 0.0 : latest_force_(i);
     return true;
   }
 
@@ -345,7 +354,7 @@ class PlantNode {
     }
     hold_lag_periods_.add(0);
     applied_states_.add(static_cast<double>(last_applied_));
-    for (int i = 0; i < codec_.dimension(); ++i) u[static_cast<std::size_t>(i)] = hold_(i);
+    for (int i = 0; i < hold_.size(); ++i) u[static_cast<std::size_t>(i)] = hold_(i);
     return true;
   }
 
@@ -369,6 +378,10 @@ class PlantNode {
       case Refusal::kNonFinite: return reject(&counts_.non_finite);
     }
     if (incoming_.run_id != run_id_) return reject(&counts_.other_run);
+    // A plant driven through its actuators holds their control: a command must carry one per
+    // actuator (a failed one carries none, and holds zero).
+    if (o_.actuators > 0 && incoming_.status == 0 && incoming_.actuators != o_.actuators)
+      return reject(&counts_.wrong_dimension);
     const std::int64_t k = incoming_.state_sequence;
     if (k > last_published_ || k <= answered_ || (exact_ && k != awaited_) ||
         k <= last_published_ - static_cast<std::int64_t>(published_at_.size()))
@@ -387,8 +400,11 @@ class PlantNode {
     latest_failed_ = incoming_.status != 0;  // any status but kOk: no answer, zero force
     latest_warnings_ = static_cast<std::uint32_t>(incoming_.warnings);
     if (latest_failed_) ++counts_.commands_failed;
-    latest_force_ = incoming_force_;
-    answers_.col(static_cast<Eigen::Index>(slot(k))) = incoming_force_;
+    const int n = codec_.dimension();
+    incoming_command_.head(n) = incoming_force_;
+    for (int j = 0; j < o_.actuators; ++j) incoming_command_(n + j) = latest_failed_ ? 0.0 : incoming_.control[j];
+    latest_force_ = incoming_command_;
+    answers_.col(static_cast<Eigen::Index>(slot(k))) = incoming_command_;
     answer_sequence_[slot(k)] = k;
     answer_failed_[slot(k)] = latest_failed_;
     answer_warnings_[slot(k)] = latest_warnings_;
@@ -536,7 +552,7 @@ class PlantNode {
   std::int64_t run_id_ = 0;
   plant_state_t state_{};
   control_command_t incoming_{};
-  Vector incoming_force_, latest_force_, hold_;
+  Vector incoming_force_, incoming_command_, latest_force_, hold_;  ///< the last three: force, then control
   bool latest_failed_ = false, ready_ = false, exact_ = true, started_ = false;
   std::array<std::uint8_t, kMessageBufferBytes> buffer_{};
   int state_bytes_ = 0;

@@ -38,6 +38,10 @@ class ControlLaw {
   virtual Status compute(const double* q, const double* qd, double t, double* force) noexcept = 0;
   /// The last compute's warnings (warning:: flags).
   virtual std::uint32_t warnings() const noexcept = 0;
+  /// The model's actuators (the entries of u), or 0 for a model without B.
+  virtual int actuators() const noexcept { return 0; }
+  /// The last compute's control u (actuators() entries, zero on failure); nullptr without B.
+  virtual const double* control() const noexcept { return nullptr; }
   virtual double tracking_error(const double* q, const double* qd, double t) const = 0;
 };
 
@@ -54,6 +58,14 @@ class ModelControlLaw final : public ControlLaw {
     return s;
   }
   std::uint32_t warnings() const noexcept override { return out_.diagnostics.warnings; }
+  int actuators() const noexcept override {
+    if constexpr (ActuatedModel<M>) return kActuatorsOf<M>;
+    else return 0;
+  }
+  const double* control() const noexcept override {
+    if constexpr (ActuatedModel<M>) return out_.control.data();
+    else return nullptr;
+  }
   double tracking_error(const double* q, const double* qd, double t) const override {
     return tracking::tracking_error(controller_.model(), V(Eigen::Map<const V>(q)), V(Eigen::Map<const V>(qd)), t);
   }
@@ -140,6 +152,7 @@ struct ModelFactory {
   std::string name;
   int dof = 0;
   int physical_rows = 0;  ///< rows the plant must hold for the law to track (RowLayout::kPhysical)
+  int actuators = 0;      ///< the entries of u for a model with B (kActuatorsOf), 0 without
   std::vector<std::string> parameter_names;
   std::function<std::unique_ptr<ControlLaw>(const TrackingSpec&)> control_law;
   std::function<std::unique_ptr<PlantModel>(const std::vector<ModelParameter>&)> plant;
@@ -156,6 +169,7 @@ ModelFactory model_factory(std::string name, M defaults = {}) {
   f.name = name;
   f.dof = M::kDof;
   f.physical_rows = RowLayout<M>::kPhysical;
+  if constexpr (ActuatedModel<M>) f.actuators = kActuatorsOf<M>;
   f.parameter_names = parameter_names<M>(defaults);
   f.control_law = [defaults](const TrackingSpec& spec) -> std::unique_ptr<ControlLaw> {
     return std::make_unique<ModelControlLaw<M>>(make_controller<M>(spec, defaults));

@@ -82,6 +82,10 @@ struct EngineSpec {
   double timestep = 0;     ///< the engine's fixed step [s]
   EngineIntegrator integrator = EngineIntegrator::kRk4;
   std::vector<std::string> effects;   ///< the engine's effects switched on; all others are off
+  /// plant.actuators: the model's own actuators (MJCF <motor>s) that the command's control u
+  /// drives, in the order of the controller's u. Empty: the command's generalized force acts on
+  /// the joints directly and the model's actuators never act.
+  std::vector<std::string> actuators;
 };
 
 /// The effects a MuJoCo plant may list; everything unlisted is switched off.
@@ -134,6 +138,10 @@ struct Scene {
   double output_period = 0.01;  ///< [s]
 
   int dof() const noexcept { return static_cast<int>(coordinates.size()); }
+  /// The engine's actuators driven by the command's control (plant.actuators); 0 otherwise.
+  int actuators() const noexcept { return static_cast<int>(engine.actuators.size()); }
+  /// The held command's entries: the generalized force (dof()), then the control (actuators()).
+  int command_size() const noexcept { return dof() + actuators(); }
 };
 
 /// Loads and checks a scene. `overrides` are "dotted.key=value" pairs applied before checking

@@ -65,8 +65,10 @@ struct RunSummary {
 class PlantEngine {
  public:
   virtual ~PlantEngine() = default;
-  /// Advances one step under force u (one entry per coordinate). Returns an empty string, or why
-  /// the plant cannot go on (the engine failed, or reset its state); the run then ends with it.
+  /// Advances one step under the held command u: the generalized force (one entry per
+  /// coordinate), then, for a plant driven through its own actuators (plant.actuators), their
+  /// control (which then acts instead of the force). Returns an empty string, or why the plant
+  /// cannot go on (the engine failed, or reset its state); the run then ends with it.
   virtual std::string step(const double* u) = 0;
   /// The state after the last step (at first, the scene's initial state).
   virtual void state(double* q, double* qd) const = 0;
@@ -90,8 +92,9 @@ struct RunOptions {
   /// Called now and then with the simulated time (for a progress display).
   std::function<void(double t)> on_progress;
   /// Sampled control from elsewhere (a controller process): called at the start of control
-  /// period `period` with the measured state, writes the force to hold into u (N entries, zero
-  /// on entry) and returns false to stop the run. Replaces the scene's own controller; needs
+  /// period `period` with the measured state, writes the command to hold into u (zero on entry:
+  /// the N force entries, then the scene's Scene::actuators() control entries) and returns false
+  /// to stop the run. Replaces the scene's own controller; needs
   /// sampled control. The spans view fixed-size storage: calling it allocates nothing.
   std::function<bool(std::int64_t period, double t, std::span<const double> q, std::span<const double> qd,
                      std::span<double> u)>
