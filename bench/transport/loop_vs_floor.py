@@ -8,7 +8,8 @@ targets (the loop's round trip within 1.2x of bare LCM at the same pace; its dea
 wake-up lateness within 1.2x of the floor's; --realtime never worse than the default scheduler).
 
 usage: loop_vs_floor.py BIN_DIR SCENE OUT [--seconds S] [--rates 1000,10000] [--no-hog]
-                        [--schedulers default,realtime,realtime_1cpu]
+                        [--schedulers default,realtime,realtime_1cpu] [--set KEY=VALUE ...]
+  --set  passed to gausstrack-run (e.g. integrator={method: rk4, step: 1.0e-4}: a fixed-step plant)
 """
 import argparse
 import json
@@ -145,7 +146,7 @@ def scheduler_args(sched):
             "realtime_1cpu": ["--realtime", "--cpus", f"{last},{last}"]}[sched]
 
 
-def measure(bin_dir, scene, out, rate, sched, hog, seconds):
+def measure(bin_dir, scene, out, rate, sched, hog, seconds, sets=()):
     tag = f"{rate:g}hz_{sched}_{'hog' if hog else 'quiet'}"
     hogs = [subprocess.Popen(["yes"], stdout=subprocess.DEVNULL)] if hog else []
     try:
@@ -160,7 +161,7 @@ def measure(bin_dir, scene, out, rate, sched, hog, seconds):
         code, threads = run_watching_threads(
             [os.path.join(bin_dir, "bin", "gausstrack-run"), scene, "--rate", f"{rate:g}", "--duration",
              f"{seconds:g}", "--set", "tracking.stabilization={zeta: 1.0, omega: 20.0}", "--out", loop_dir,
-             "--no-plots", "--channel-prefix", prefix] + rt,
+             "--no-plots", "--channel-prefix", prefix] + [x for kv in sets for x in ("--set", kv)] + rt,
             os.path.join(out, f"loop_{tag}.txt"), prefix)
         softirq_after = softirq_snapshot()
         if code != 0:
@@ -194,12 +195,14 @@ def ratio(a, b):
     return a / b if b else float("inf") if a else 1.0
 
 
-def report(rows, out, seconds):
+def report(rows, out, seconds, scene="", sets=()):
     lines = ["# The closed loop against the machine's floors", "",
+             f"Scene `{os.path.basename(scene)}`" + (", " + ", ".join(f"`--set {x}`" for x in sets) if sets else "")
+             + ".", "",
              f"Written by `bench/transport/loop_vs_floor.py`; every row is one run of {seconds:g} s per path, all "
              "rows in one invocation. `floor`: a bare `clock_nanosleep` loop at the rate (cyclictest's method); "
              "`UDP`, `LCM`: bare round trips paced at the same rate and scheduling; `loop`: `gausstrack-run` (the "
-             "Duffing scene, plant and controller processes). Schedulers: `default`; `realtime` (SCHED_FIFO, "
+             "scene's plant and controller processes). Schedulers: `default`; `realtime` (SCHED_FIFO, "
              "mlockall, the two processes pinned to the last two CPUs, one each); `realtime_1cpu` (the same, both "
              "on the last CPU). Round trips and wake-up lateness in us (p50 / p99); "
              "misses: wake-ups more than half a period late; ksoftirqd: CPU time of the kernel's deferred-softirq "
@@ -281,6 +284,7 @@ def main(argv):
     p.add_argument("--rates", default="1000,10000")
     p.add_argument("--no-hog", action="store_true")
     p.add_argument("--schedulers", default=",".join(SCHEDULERS), help="of " + ", ".join(SCHEDULERS))
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="passed to gausstrack-run")
     a = p.parse_args(argv)
     schedulers = a.schedulers.split(",")
     if any(x not in SCHEDULERS for x in schedulers):
@@ -290,11 +294,11 @@ def main(argv):
     for rate in [float(x) for x in a.rates.split(",")]:
         for sched in schedulers:
             for hog in (False,) if a.no_hog else (False, True):
-                rows.append(measure(a.bin_dir, a.scene, a.out, rate, sched, hog, a.seconds))
+                rows.append(measure(a.bin_dir, a.scene, a.out, rate, sched, hog, a.seconds, a.set))
                 print(json.dumps(rows[-1]), flush=True)
     with open(os.path.join(a.out, "loop_vs_floor.json"), "w") as f:
         json.dump(rows, f, indent=1)
-    report(rows, a.out, a.seconds)
+    report(rows, a.out, a.seconds, a.scene, a.set)
     return 0 if all("error" not in r for r in rows) else 1
 
 

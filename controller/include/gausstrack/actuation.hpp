@@ -58,6 +58,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
 #include "gausstrack/model.hpp"
 #include "gausstrack/rank_revealing.hpp"
@@ -287,10 +288,7 @@ class ActuatedController {
     out.saturation_scale = Scalar(1);
     out.diagnostics = SolveDiagnostics<Scalar>{};
     evaluate_model(model_, qv, qdv, t, terms_);
-    if constexpr (ActuatedModel<M>)
-      model_.actuation(qv, t, b_);
-    else
-      b_.setIdentity();
+    if constexpr (ActuatedModel<M>) model_.actuation(qv, t, b_);  // else B = I, set once
     out.constraint_error = terms_.constraint_error;
     out.constraint_error_rate = terms_.constraint_error_rate;
     using small_dense::all_finite;
@@ -313,9 +311,12 @@ class ActuatedController {
     if (bad != 0) return fail(out, Status::kNonFiniteInput, bad);
 
     VectorP correction = VectorP::Zero();
+    bool corrected = false;  // some active row has stabilization or a robust term
     for (int i = 0; i < P; ++i) {
       if (RowLayout<M>::physical(i) || !active_[static_cast<std::size_t>(i)]) continue;
       const auto k = static_cast<std::size_t>(i);
+      if (!row_gains_[k].enabled() && !row_robust_[k].enabled()) continue;
+      corrected = true;
       correction(i) = row_correction(row_gains_[k], row_robust_[k], terms_.constraint_error(i),
                                      terms_.constraint_error_rate(i));
     }
@@ -525,39 +526,51 @@ class ActuatedController {
       sigma_hi = sigma(0);
       sigma_lo = rank > 0 ? sigma(rank - 1) : Scalar(0);
     }
-    // X = T^+ R for the three parts of r at once (their task rows: -D_c a_p, g_c, the
-    // correction); U = back X (U = L X without B).
-    Eigen::Matrix<Scalar, kTask, 3> rhs;
-    {
-      const VectorP drift = -(terms_.constraint_matrix * a);  // a is a_p here
+    // X = T^+ R for the parts of r at once (their task rows: -D_c a_p, g_c, and the correction
+    // when a row has one); U = back X (U = L X without B).
+    const VectorP drift = -(terms_.constraint_matrix * a);  // a is a_p here
+    VectorN unmapped;  // without B: the parts' sum before u = L x (then L^-1 u needs no solve)
+    auto solve_parts = [&](auto& rhs, auto& x) {  // rhs: kTask x C, x: K x C
+      constexpr int C = std::remove_reference_t<decltype(rhs)>::ColsAtCompileTime;
       for (int j = 0; j < kTask; ++j) {
         const int row = kTaskRows[static_cast<std::size_t>(j)];
         const bool on = active_[static_cast<std::size_t>(row)];
         rhs(j, 0) = on ? drift(row) : Scalar(0);
         rhs(j, 1) = on ? terms_.constraint_rhs(row) : Scalar(0);
-        rhs(j, 2) = on ? correction(row) : Scalar(0);
+        if constexpr (C == 3) rhs(j, 2) = on ? correction(row) : Scalar(0);
       }
-    }
+      if (normal) {
+        if constexpr (kTask >= 1 && kTask <= K) {
+          small_dense::multiply_lower_in_place(gram_l_inv, rhs);             // L_G^-1 R
+          small_dense::multiply_lower_transposed_in_place(gram_l_inv, rhs);  // (T T^T)^-1 R
+          x.noalias() = task_t * rhs;
+        }
+      } else if constexpr (K >= kTask) {
+        x.noalias() = w * (inverse.asDiagonal() * (v.transpose() * rhs));  // task^T = w S v^T
+      } else {
+        x.noalias() = v * (inverse.asDiagonal() * (w.transpose() * rhs));  // task = w S v^T
+      }
+      bool mapped = false;
+      if constexpr (!ActuatedModel<M>) {
+        if (identity_gauss) {
+          for (int i = 0; i < N; ++i) unmapped(i) = x.row(i).sum();  // L^-1 u, before scaling
+          multiply_l(x);
+          mapped = true;
+        }
+      }
+      if (!mapped) x = (back * x).eval();
+    };
     Eigen::Matrix<Scalar, K, 3> parts;
-    if (normal) {
-      if constexpr (kTask >= 1 && kTask <= K) {
-        small_dense::multiply_lower_in_place(gram_l_inv, rhs);             // L_G^-1 R
-        small_dense::multiply_lower_transposed_in_place(gram_l_inv, rhs);  // (T T^T)^-1 R
-        parts.noalias() = task_t * rhs;
-      }
-    } else if constexpr (K >= kTask) {
-      parts.noalias() = w * (inverse.asDiagonal() * (v.transpose() * rhs));  // task^T = w S v^T
-    } else {
-      parts.noalias() = v * (inverse.asDiagonal() * (w.transpose() * rhs));  // task = w S v^T
+    if (corrected) {
+      Eigen::Matrix<Scalar, kTask, 3> rhs;
+      solve_parts(rhs, parts);
+    } else {  // no correction: its column is zero, and not computed
+      Eigen::Matrix<Scalar, kTask, 2> rhs;
+      Eigen::Matrix<Scalar, K, 2> two;
+      solve_parts(rhs, two);
+      parts.template leftCols<2>() = two;
+      parts.col(2).setZero();
     }
-    bool mapped = false;
-    if constexpr (!ActuatedModel<M>) {
-      if (identity_gauss) {
-        multiply_l(parts);
-        mapped = true;
-      }
-    }
-    if (!mapped) parts = (back * parts).eval();
     out.control_closed_loop = parts.col(0);
     out.control_feedforward = parts.col(1);
     out.control_stabilizing = parts.col(2);
@@ -617,11 +630,15 @@ class ActuatedController {
     // q'' = a_p + M_p B u = a_p + L^-T P_n (L^-1 B) u.
     VectorN pushed;
     if constexpr (!ActuatedModel<M>) {
-      pushed = out.control;
-      if (identity_gauss)
-        solve_l(pushed);
-      else
+      if (identity_gauss) {
+        pushed = unmapped;
+        if (out.saturation_scale < Scalar(1)) {  // scaled, and clamped to the limits: from u itself
+          pushed = out.control;
+          solve_l(pushed);
+        }
+      } else {
         pushed = lb * out.control;
+      }
     } else {
       pushed = lb * out.control;
     }
@@ -671,23 +688,30 @@ class ActuatedController {
   template <int Cols>
   void solve_l(Eigen::Matrix<Scalar, N, Cols>& x) const noexcept {  // x = L^-1 x
     if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal)
-      x = l_inv_diag_.asDiagonal() * x;
+      scale_rows(l_inv_diag_, x);
     else
       small_dense::solve_lower_in_place(l_, x);
   }
   template <int Cols>
   void solve_lt(Eigen::Matrix<Scalar, N, Cols>& x) const noexcept {  // x = L^-T x
     if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal)
-      x = l_inv_diag_.asDiagonal() * x;
+      scale_rows(l_inv_diag_, x);
     else
       small_dense::solve_lower_transposed_in_place(l_, x);
   }
   template <int Cols>
   void multiply_l(Eigen::Matrix<Scalar, N, Cols>& x) const noexcept {  // x = L x
     if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal)
-      x = l_diag_.asDiagonal() * x;
+      scale_rows(l_diag_, x);
     else
       small_dense::multiply_lower_in_place(l_, x);
+  }
+
+  // x = diag(d) x, in place (plain loops: inlined where Eigen's unrolled product is not).
+  template <int Cols>
+  static void scale_rows(const VectorN& d, Eigen::Matrix<Scalar, N, Cols>& x) noexcept {
+    for (int c = 0; c < Cols; ++c)
+      for (int i = 0; i < N; ++i) x(i, c) *= d(i);
   }
 
   // x -= U_p (U_p^T x): onto the directions the physical rows leave free.
@@ -725,7 +749,7 @@ class ActuatedController {
   bool gauss_weight_ = true;
   MatrixKK weight_factor_ = MatrixKK::Identity();
   TermsOf<M> terms_{};
-  MatrixNK b_ = MatrixNK::Zero();
+  MatrixNK b_ = ActuatedModel<M> ? MatrixNK(MatrixNK::Zero()) : MatrixNK(MatrixNK::Identity());
   Eigen::Matrix<Scalar, N, N> l_ =
       Eigen::Matrix<Scalar, N, N>::Zero();  // A = L L^T (lower triangle)
   VectorN l_diag_ = VectorN::Zero(),
