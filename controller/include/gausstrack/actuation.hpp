@@ -653,7 +653,9 @@ class ActuatedController {
     const VectorP g = terms_.constraint_rhs + correction;
     out.row_residual = terms_.constraint_matrix * out.acceleration - g;
     const Scalar acceleration2 = out.acceleration.squaredNorm();
-    const VectorP row_norm2 = terms_.constraint_matrix.rowwise().squaredNorm();
+    VectorP row_norm2 = VectorP::Zero();  // column by column: D is stored by columns
+    for (int c = 0; c < N; ++c)
+      for (int i = 0; i < P; ++i) row_norm2(i) += terms_.constraint_matrix(i, c) * terms_.constraint_matrix(i, c);
     const Scalar tol2 = options_.solver.residual_tolerance * options_.solver.residual_tolerance;
     Scalar residual2 = Scalar(0);
     for (int i = 0; i < P; ++i) {
