@@ -385,6 +385,13 @@ def transport(d):
         with open(floor) as f:
             body = f.read().split("\n", 1)[1]
         out += ["## The closed loop against the machine's floors (same run)"] + demote(body)
+    fixed = os.path.join(d, "loop_vs_floor_rk4", "README.md")
+    if os.path.exists(fixed):
+        with open(fixed) as f:
+            body = f.read().split("\n", 1)[1]
+        out += ["## The same at 10 kHz with a fixed-step plant (one RK4 step per period)",
+                "", "What a user running a plant in real time would choose: the Duffing scene with "
+                "`integrator={method: rk4, step: 1.0e-4}` instead of dopri5 at 1e-10."] + demote(demote(body))
     return out
 
 
