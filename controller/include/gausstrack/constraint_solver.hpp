@@ -456,9 +456,7 @@ class ConstraintSolver {
     MatrixPP gram;  // B B^T: dot products of B^T's columns
     for (int j = 0; j < P; ++j)
       for (int i = j; i < P; ++i) {
-        Scalar dot(0);
-        for (int k = 0; k < N; ++k) dot += bt_(k, i) * bt_(k, j);
-        gram(i, j) = gram(j, i) = dot;
+        gram(i, j) = gram(j, i) = small_dense::dot(bt_.data() + i * N, bt_.data() + j * N, N);
       }
     for (int i = 0; i < P; ++i) gram(i, i) += lambda2;
     if (!small_dense::all_finite(gram.data(), P * P)) return false;

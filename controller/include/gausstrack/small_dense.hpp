@@ -18,11 +18,47 @@ namespace gausstrack::small_dense {
 // whatever Eigen's storage order): the solver's whole-matrix checks and products without an Eigen
 // expression per use.
 
+/// Every entry finite. Short arrays entry by entry (the first non-finite one ends the test); long
+/// ones by x - x, which is 0 for a finite x and NaN otherwise, summed in four independent chains
+/// without a branch (a sum of them stays 0 only when every entry is finite).
 template <typename Scalar>
 bool all_finite(const Scalar* x, int count) noexcept {
-  for (int i = 0; i < count; ++i)
-    if (!std::isfinite(x[i])) return false;
-  return true;
+  if (count < 16) {
+    for (int i = 0; i < count; ++i)
+      if (!std::isfinite(x[i])) return false;
+    return true;
+  }
+  Scalar s0(0), s1(0), s2(0), s3(0);
+  int i = 0;
+  for (; i + 4 <= count; i += 4) {
+    s0 += x[i] - x[i];
+    s1 += x[i + 1] - x[i + 1];
+    s2 += x[i + 2] - x[i + 2];
+    s3 += x[i + 3] - x[i + 3];
+  }
+  for (; i < count; ++i) s0 += x[i] - x[i];
+  return (s0 + s1) + (s2 + s3) == Scalar(0);
+}
+
+/// x . y; from 8 entries with four partial sums side by side (a dot product's one accumulator is
+/// a dependent chain of additions; the order here is fixed, whatever the compiler).
+template <typename Scalar>
+Scalar dot(const Scalar* x, const Scalar* y, int count) noexcept {
+  if (count < 8) {
+    Scalar s(0);
+    for (int i = 0; i < count; ++i) s += x[i] * y[i];
+    return s;
+  }
+  Scalar s0(0), s1(0), s2(0), s3(0);
+  int i = 0;
+  for (; i + 4 <= count; i += 4) {
+    s0 += x[i] * y[i];
+    s1 += x[i + 1] * y[i + 1];
+    s2 += x[i + 2] * y[i + 2];
+    s3 += x[i + 3] * y[i + 3];
+  }
+  for (; i < count; ++i) s0 += x[i] * y[i];
+  return (s0 + s1) + (s2 + s3);
 }
 
 /// a == b entry by entry (so 0 == -0, and NaN equals nothing).
@@ -35,9 +71,7 @@ bool all_equal(const Scalar* a, const Scalar* b, int count) noexcept {
 
 template <typename Scalar>
 Scalar squared_norm(const Scalar* x, int count) noexcept {
-  Scalar sum(0);
-  for (int i = 0; i < count; ++i) sum += x[i] * x[i];
-  return sum;
+  return dot(x, x, count);
 }
 
 /// y = M x for the rows x cols column-major M (y must not alias x).
@@ -106,9 +140,13 @@ void solve_lower_transposed_in_place(const Eigen::Matrix<Scalar, N, N>& l,
     Scalar* xc = x.data() + c * N;
     for (int k = N - 1; k >= 0; --k) {
       const Scalar* ck = a + k * N;
-      Scalar s = xc[k];
-      for (int i = k + 1; i < N; ++i) s -= ck[i] * xc[i];
-      xc[k] = s * inverse[k];
+      if constexpr (N >= 8) {
+        xc[k] = (xc[k] - dot(ck + k + 1, xc + k + 1, N - k - 1)) * inverse[k];
+      } else {
+        Scalar s = xc[k];
+        for (int i = k + 1; i < N; ++i) s -= ck[i] * xc[i];
+        xc[k] = s * inverse[k];
+      }
     }
   }
 }
@@ -157,13 +195,14 @@ Scalar invert_lower(const Eigen::Matrix<Scalar, N, N>& l, Eigen::Matrix<Scalar, 
   Scalar sum(0);
   Scalar reciprocal[N];
   for (int k = 0; k < N; ++k) reciprocal[k] = Scalar(1) / a[k * N + k];
-  for (int c = 0; c < N; ++c) {  // column c of L^-1 solves L z = e_c; its rows above c are zero
-    Scalar* zc = z + c * N;
-    for (int i = 0; i < c; ++i) zc[i] = Scalar(0);
-    zc[c] = Scalar(1);
-    for (int i = c + 1; i < N; ++i) zc[i] = Scalar(0);
-    for (int k = c; k < N; ++k) {
-      const Scalar* ck = a + k * N;
+  // Column c of L^-1 solves L z = e_c; its rows above c are zero. Step k runs for every column
+  // that has reached it: independent chains side by side.
+  for (int i = 0; i < N * N; ++i) z[i] = Scalar(0);
+  for (int c = 0; c < N; ++c) z[c * N + c] = Scalar(1);
+  for (int k = 0; k < N; ++k) {
+    const Scalar* ck = a + k * N;
+    for (int c = 0; c <= k; ++c) {
+      Scalar* zc = z + c * N;
       const Scalar v = zc[k] * reciprocal[k];
       zc[k] = v;
       sum += v * v;
