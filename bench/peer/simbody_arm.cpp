@@ -88,6 +88,10 @@ struct SimbodyArm::Impl {
       links[i] =
           SimTK::MobilizedBody::Pin(*parent, SimTK::Transform(joint), body, SimTK::Transform());
       parent = &links[i];
+      // The model's viscous joint damping, -c q'.
+      if (arm.damping != 0)
+        SimTK::Force::MobilityLinearDamper(forces, links[i], SimTK::MobilizerUIndex(0),
+                                           arm.damping);
     }
     hand = SimTK::Constraint::Custom(
         new HandOnCircle(links[2], SimTK::Vec3(arm.length[2], 0, 0), arm));

@@ -15,7 +15,7 @@ namespace gausstrack::peer {
 /// The arm's parameters, as systems::PlanarArm names them (arm_parameters() copies them).
 struct ArmParameters {
   double mass[3], length[3], com[3], inertia[3];
-  double gravity;
+  double gravity, damping;
   double center[2], radius, rate, phase;
 };
 
@@ -46,7 +46,7 @@ ArmParameters arm_parameters(const Arm& arm) {
     p.mass[i] = arm.mass(i), p.length[i] = arm.length(i), p.com[i] = arm.com(i),
     p.inertia[i] = arm.inertia(i);
   }
-  p.gravity = arm.gravity;
+  p.gravity = arm.gravity, p.damping = arm.damping;
   p.center[0] = arm.center_x, p.center[1] = arm.center_y;
   p.radius = arm.radius, p.rate = arm.rate, p.phase = arm.phase;
   return p;

@@ -254,6 +254,10 @@ Control::Control(const Scene& s, const RunOptions& o) : actuators_(s.actuators()
     TrackingSpec spec = s.tracking;
     spec.period = s.control_mode == ControlMode::kSampled ? 1.0 / s.control_rate : 0.0;
     law_ = model.control_law(spec);
+    if (law_->actuators() != model.actuators)
+      throw SceneError(s.tracking.where + ": model '" + s.tracking.model + "' declares " +
+                       std::to_string(model.actuators) + " actuators but its law has " +
+                       std::to_string(law_->actuators()) + " (its ModelFactory's actuators is wrong)");
   }
 }
 

@@ -192,8 +192,12 @@ void read_engine(const Reader& plant, Scene& s) {
       if (std::find(e.actuators.begin(), e.actuators.end(), name) != e.actuators.end()) r.fail("listed twice");
       e.actuators.push_back(name);
     }
-  if (e.actuators.size() > static_cast<std::size_t>(kMaxCoordinates))
-    plant.child("actuators").fail("at most " + std::to_string(kMaxCoordinates) + " actuators");
+  // The plant holds the force and the control in one command of the messages' size.
+  if (s.dof() + static_cast<int>(e.actuators.size()) > kMaxCoordinates)
+    plant.child("actuators").fail("names " + std::to_string(e.actuators.size()) + " actuators for " +
+                                  std::to_string(s.dof()) + " coordinates: the held command (a force per coordinate "
+                                  "and a control per actuator) has at most " + std::to_string(kMaxCoordinates) +
+                                  " entries");
 }
 
 bool names_engine(const Reader& plant) {

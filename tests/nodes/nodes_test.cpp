@@ -558,6 +558,9 @@ TEST_F(PlantFixture, ActuatedPlantHoldsTheControlAfterTheForce) {
   // A command span without room for the control stops the run.
   std::array<double, 2> force_only{};
   EXPECT_FALSE(node.exchange(3, 0.015, q, qd, force_only));
+  // Force and control share the message's 32 entries.
+  o.actuators = 13;
+  EXPECT_THROW(PlantNode(lcm, states, "CMD2", 20, o), std::invalid_argument);
 }
 
 // The hold's delay each state reports (what the controller's sampled-data hold predicts over):

@@ -63,6 +63,7 @@ TEST(SimbodyPeer, AnotherArmOnAnotherCircleToo) {
   arm.com << 0.3, 0.5, 0.1;
   arm.inertia << 0.2, 0.05, 0.01;
   arm.gravity = 3.7;
+  arm.damping = 0.4;
   arm.center_x = 0.4, arm.center_y = -0.9, arm.radius = 0.6, arm.rate = 2.3, arm.phase = 0.7;
   expect_same_motion(arm);
 }

@@ -347,6 +347,11 @@ TEST(MujocoScenes, BadEngineScenesAreRefusedWithTheirReason) {
   EXPECT_NE(wrist_error_of({"tracking.model=planar_arm"}).find("no actuation matrix B"), std::string::npos);
   EXPECT_NE(wrist_error_of({"plant.model=" + kTestModels + "/arm3_servo.xml"}).find("'elbow_motor' is not a motor"),
             std::string::npos);
+  EXPECT_NE(wrist_error_of({"plant.model=" + kTestModels + "/arm3_force_limited.xml"}).find("is force limited"),
+            std::string::npos);
+  std::string thirty = "plant.actuators=[";
+  for (int k = 0; k < 30; ++k) thirty += (k ? ", m" : "m") + std::to_string(k);
+  EXPECT_NE(wrist_error_of({thirty + "]"}).find("has at most 32 entries"), std::string::npos);
   EXPECT_NE(wrist_error_of({"plant.actuators=[shoulder_motor, shoulder_motor]"}).find("listed twice"), std::string::npos);
   EXPECT_NE(error_of({"plant.actuators=[shoulder_motor]", "tracking=null"}).find("no actuator named"), std::string::npos);
   // The model class itself refuses a joint named twice (the other would get no force).

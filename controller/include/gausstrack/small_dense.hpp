@@ -41,7 +41,8 @@ bool all_finite(const Scalar* x, int count) noexcept {
 }
 
 /// x . y; from 8 entries with four partial sums side by side (a dot product's one accumulator is
-/// a dependent chain of additions; the order here is fixed, whatever the compiler).
+/// a dependent chain of additions). The order of the additions is the code's (a compiler that
+/// contracts into FMA still rounds differently).
 template <typename Scalar>
 Scalar dot(const Scalar* x, const Scalar* y, int count) noexcept {
   if (count < 8) {

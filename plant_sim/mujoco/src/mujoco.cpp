@@ -152,6 +152,9 @@ void MujocoModel::configure_actuators(const EngineSpec& spec) {
         m_->actuator_biastype[a] != mjBIAS_NONE)
       fail("actuator '" + name + "' is not a motor (a <motor>: no activation dynamics, a fixed gain, no bias), so "
            "its force is not B u");
+    if (m_->actuator_forcelimited[a])
+      fail("actuator '" + name + "' is force limited (forcerange): MuJoCo would saturate it, and its force would "
+           "not be B u (limit the controller's u instead: tracking.force_limit)");
     actuator_ids_.push_back(a);
   }
   if (m_->nu != static_cast<int>(spec.actuators.size()))
@@ -160,6 +163,9 @@ void MujocoModel::configure_actuators(const EngineSpec& spec) {
 }
 
 MujocoModel::~MujocoModel() { release(); }
+
+// MuJoCo 2.x keeps actuator_moment dense, nu x nv (3.x made it sparse).
+static_assert(mjVERSION_HEADER < 300, "actuation_matrix reads actuator_moment as MuJoCo 2.x stores it");
 
 void MujocoModel::actuation_matrix(double* B) const {
   const int nv = m_->nv;

@@ -201,8 +201,9 @@ class PlantNode {
         answered_sequences_(o.periods), deadline_work_us_(o.periods), hold_lag_periods_(o.periods),
         applied_states_(o.periods) {
     run_id_ = o.run_id != 0 ? o.run_id : random_run_id();
-    if (o.actuators < 0 || o.actuators > kMaxDimension)
-      throw std::invalid_argument("PlantNode: " + std::to_string(o.actuators) + " actuators is not in 0..32");
+    if (o.actuators < 0 || dimension + o.actuators > kMaxDimension)
+      throw std::invalid_argument("PlantNode: " + std::to_string(o.actuators) + " actuators for dimension " +
+                                  std::to_string(dimension) + ": the held command (force, then control) has at most 32 entries");
     const int held = dimension + o.actuators;
     hold_ = Vector::Zero(held);
     incoming_force_ = Vector::Zero(dimension);
