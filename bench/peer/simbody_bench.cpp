@@ -5,8 +5,8 @@
 //                      O(n) kinematics, mass properties, constraint Jacobian and multipliers)
 //   peer/arm/law       TrackingController<PlanarArm>, stabilization off (as Simbody has none):
 //                      the model's terms and eq. (32), with its checks, diagnostics and q''
-//   peer/arm/kkt       the model's terms and the dynamic-size KKT LU (dynamic_kkt_force): what a
-//   user
+//   peer/arm/kkt       the model's terms and the dynamic-size KKT LU (bench_dynamic_kkt, as
+//   controller_bench's baseline): what a user
 //                      writes without either library
 #include <benchmark/benchmark.h>
 
@@ -47,16 +47,6 @@ void bench_law(benchmark::State& state) {
   });
 }
 
-void bench_kkt(benchmark::State& state) {
-  static const States<Arm> s;
-  const Arm arm{};
-  measure(state, [&](std::size_t k) {
-    const BaselineTerms<Arm> t(arm, s, k);
-    const Eigen::VectorXd force = dynamic_kkt_force(t.A, t.f, t.Q, t.D, t.g);
-    benchmark::DoNotOptimize(force.data());
-  });
-}
-
 // The accuracy gate: the law's q'' against Simbody's at every benchmark state.
 bool same_motion() {
   const States<Arm> s;
@@ -84,7 +74,7 @@ int main(int argc, char** argv) {
   if (!same_motion()) return 1;
   benchmark::RegisterBenchmark("peer/arm/simbody", bench_simbody);
   benchmark::RegisterBenchmark("peer/arm/law", bench_law);
-  benchmark::RegisterBenchmark("peer/arm/kkt", bench_kkt);
+  benchmark::RegisterBenchmark("peer/arm/kkt", bench_dynamic_kkt<Arm>);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

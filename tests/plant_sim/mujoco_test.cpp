@@ -308,15 +308,18 @@ TEST(MujocoFailures, MujocoErrorsEndTheRunNotTheProcess) {
   EXPECT_EQ(again.samples.size(), 101u);
 }
 
+// The scene's refusal, or "no error".
+std::string scene_error(const std::string& scene, const std::vector<std::string>& sets) {
+  try {
+    run(scene, sets);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
 TEST(MujocoScenes, BadEngineScenesAreRefusedWithTheirReason) {
-  auto error_of = [](const std::vector<std::string>& sets) -> std::string {
-    try {
-      run("planar_arm_mujoco.yaml", sets);
-    } catch (const SceneError& e) {
-      return e.what();
-    }
-    return "no error";
-  };
+  auto error_of = [](const std::vector<std::string>& sets) { return scene_error("planar_arm_mujoco.yaml", sets); };
   EXPECT_NE(error_of({"plant.coordinates=[shoulder, elbow, hand]"}).find("no joint named 'hand'"), std::string::npos);
   EXPECT_NE(error_of({"plant.coordinates=[shoulder, elbow]", "plant.initial={}", "tracking=null"}).find("3 degrees of freedom"),
             std::string::npos);
@@ -332,13 +335,8 @@ TEST(MujocoScenes, BadEngineScenesAreRefusedWithTheirReason) {
   EXPECT_NE(error_of({"plant.coordinates=[shoulder, elbow, elbow]"}).find("duplicate coordinate"), std::string::npos);
   // Actuators: each must exist and be a motor, all must be named, and the controller's u must
   // have one entry per actuator.
-  auto wrist_error_of = [](const std::vector<std::string>& sets) -> std::string {
-    try {
-      run("planar_arm_passive_wrist_mujoco.yaml", sets);
-    } catch (const SceneError& e) {
-      return e.what();
-    }
-    return "no error";
+  auto wrist_error_of = [](const std::vector<std::string>& sets) {
+    return scene_error("planar_arm_passive_wrist_mujoco.yaml", sets);
   };
   EXPECT_NE(wrist_error_of({"plant.actuators=[shoulder_motor, wrist_motor]"}).find("no actuator named 'wrist_motor'"),
             std::string::npos);
