@@ -225,33 +225,44 @@ class ConstraintSolver {
     if (const Status s = check_and_factor(A, f, Q, D, g, out); failed(s)) return s;
     out.diagnostics = factor_diagnostics_;
 
-    // a = A^-1 (Q - f); right sides of the two eq. (32) terms, -D a and g, solved together.
-    VectorN& a = out.unconstrained_acceleration;
-    for (int i = 0; i < N; ++i) a(i) = Q(i) - f(i);
-    solve_mass_in_place(a);
+    // u = L^-1 (Q - f), so that a = A^-1 (Q - f) = L^-T u and D a = B u: the right sides of the
+    // two eq. (32) terms, -D a and g, solved together, take -D a as a product with B^T (kept
+    // with the factors), and a and q'' = a + L^-T y = L^-T (u + y) are one back substitution on
+    // two columns side by side.
+    VectorN u;
+    for (int i = 0; i < N; ++i) u(i) = Q(i) - f(i);
+    solve_l_in_place(u);
     Eigen::Matrix<Scalar, P, 2> rhs;
-    small_dense::multiply(D.data(), P, N, a.data(), rhs.data());
     for (int i = 0; i < P; ++i) {
-      rhs(i, 0) = -rhs(i, 0);
+      rhs(i, 0) = -small_dense::dot(bt_.data() + i * N, u.data(), N);  // -(B u)_i = -(D a)_i
       rhs(i, 1) = g(i);
     }
     Eigen::Matrix<Scalar, N, 2> y;
     apply_pseudo_inverse(rhs, y);
 
-    VectorN dq;
-    for (int i = 0; i < N; ++i) dq(i) = y(i, 0) + y(i, 1);
+    Eigen::Matrix<Scalar, N, 2> w;  // [u, u + y], then L^-T of both: [a, q'']
+    for (int i = 0; i < N; ++i) {
+      w(i, 0) = u(i);
+      w(i, 1) = u(i) + (y(i, 0) + y(i, 1));
+    }
     apply_l_in_place(y);  // L y
     for (int i = 0; i < N; ++i) {
       out.force_from_impressed(i) = y(i, 0);
       out.force_from_rhs(i) = y(i, 1);
       out.constraint_force(i) = y(i, 0) + y(i, 1);
     }
-    solve_lt_in_place(dq);  // L^-T y
-    for (int i = 0; i < N; ++i) out.acceleration(i) = a(i) + dq(i);
+    solve_lt_in_place(w);
+    for (int i = 0; i < N; ++i) {
+      out.unconstrained_acceleration(i) = w(i, 0);
+      out.acceleration(i) = w(i, 1);
+    }
 
-    // Both parts are finite when their sum is (an Inf or NaN part makes the sum Inf or NaN).
+    // Both parts are finite when their sum is (an Inf or NaN part makes the sum Inf or NaN). a
+    // is checked apart: q'' = L^-T (u + y) can be finite where a = L^-T u overflowed (the
+    // constraint cancelling an unconstrained acceleration beyond the range).
     if (!small_dense::all_finite(out.acceleration.data(), N) ||
-        !small_dense::all_finite(out.constraint_force.data(), N)) {
+        !small_dense::all_finite(out.constraint_force.data(), N) ||
+        !small_dense::all_finite(out.unconstrained_acceleration.data(), N)) {
       return fail(out, Status::kNonFiniteResult);
     }
     set_warnings(D, g, out);
@@ -345,12 +356,11 @@ class ConstraintSolver {
         if (!(m > Scalar(0))) return false;
         sqrt_mass_(i) = std::sqrt(m);
         inverse_sqrt_mass_(i) = Scalar(1) / sqrt_mass_(i);
-        inverse_mass_(i) = Scalar(1) / m;
       }
       return true;
     } else {
-      mass_key_ = A;
-      mass_l_ = mass_key_;
+      if (options_.reuse_factorization) mass_key_ = A;  // only compared when kept
+      mass_l_ = A;
       return small_dense::cholesky_in_place(mass_l_);
     }
   }
@@ -364,12 +374,11 @@ class ConstraintSolver {
       small_dense::solve_lower_in_place(mass_l_, bt_);
     }
   }
-  void solve_mass_in_place(VectorN& x) const noexcept {  // x = A^-1 x
+  void solve_l_in_place(VectorN& x) const noexcept {  // x = L^-1 x
     if constexpr (kMass == MassMatrix::kDiagonal) {
-      for (int i = 0; i < N; ++i) x(i) *= inverse_mass_(i);
+      for (int i = 0; i < N; ++i) x(i) *= inverse_sqrt_mass_(i);
     } else {
       small_dense::solve_lower_in_place(mass_l_, x);
-      small_dense::solve_lower_transposed_in_place(mass_l_, x);
     }
   }
   template <int K>
@@ -381,9 +390,11 @@ class ConstraintSolver {
       small_dense::multiply_lower_in_place(mass_l_, x);
     }
   }
-  void solve_lt_in_place(VectorN& x) const noexcept {  // x = L^-T x
+  template <int K>
+  void solve_lt_in_place(Eigen::Matrix<Scalar, N, K>& x) const noexcept {  // x = L^-T x
     if constexpr (kMass == MassMatrix::kDiagonal) {
-      for (int i = 0; i < N; ++i) x(i) *= inverse_sqrt_mass_(i);
+      for (int k = 0; k < K; ++k)
+        for (int i = 0; i < N; ++i) x(i, k) *= inverse_sqrt_mass_(i);
     } else {
       small_dense::solve_lower_transposed_in_place(mass_l_, x);
     }
@@ -600,7 +611,7 @@ class ConstraintSolver {
   bool factored_ = false;
   MatrixNN mass_key_ = MatrixNN::Zero();   // A (dense)
   VectorN mass_diagonal_ = VectorN::Zero();  // A's diagonal (diagonal)
-  VectorN sqrt_mass_ = VectorN::Zero(), inverse_sqrt_mass_ = VectorN::Zero(), inverse_mass_ = VectorN::Zero();
+  VectorN sqrt_mass_ = VectorN::Zero(), inverse_sqrt_mass_ = VectorN::Zero();
   MatrixPN d_key_ = MatrixPN::Zero();       // D
   Scalar d_norm2_ = Scalar(0);              // ||D||_F^2
   Scalar inverse_gram_ = Scalar(0);         // 1 / (B B^T + lambda^2) when P = 1

@@ -129,7 +129,11 @@ void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l,
   }
 }
 
-/// x = L^-T x for every column of x (back substitution: dot products down L's columns).
+/// x = L^-T x for every column of x (back substitution: dot products down L's columns). Each
+/// unknown's sum runs from the last row up in two partial sums and takes the newest unknown,
+/// x_(k+1), last: the terms of the older unknowns are summed while x_(k+1) is still being
+/// computed, so the dependent path from one unknown to the next is one multiply-add, a
+/// subtraction and a multiplication rather than the whole sum.
 template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
 void solve_lower_transposed_in_place(const Eigen::Matrix<Scalar, N, N>& l,
                                      Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
@@ -141,13 +145,16 @@ void solve_lower_transposed_in_place(const Eigen::Matrix<Scalar, N, N>& l,
     Scalar* xc = x.data() + c * N;
     for (int k = N - 1; k >= 0; --k) {
       const Scalar* ck = a + k * N;
-      if constexpr (N >= 8) {
-        xc[k] = (xc[k] - dot(ck + k + 1, xc + k + 1, N - k - 1)) * inverse[k];
-      } else {
-        Scalar s = xc[k];
-        for (int i = k + 1; i < N; ++i) s -= ck[i] * xc[i];
-        xc[k] = s * inverse[k];
+      Scalar s0(0), s1(0);
+      int i = N - 1;
+      for (; i > k + 2; i -= 2) {
+        s0 += ck[i] * xc[i];
+        s1 += ck[i - 1] * xc[i - 1];
       }
+      if (i == k + 2) s0 += ck[i] * xc[i];
+      Scalar s = xc[k] - (s0 + s1);
+      if (k + 1 < N) s -= ck[k + 1] * xc[k + 1];
+      xc[k] = s * inverse[k];
     }
   }
 }
