@@ -238,6 +238,54 @@ def phases(b, models):
         out.append(f"| {m} | " + " | ".join("-" if math.isnan(v) else ns(v) for v in parts)
                    + f" | {ns(rest)} | {ns(general - terms)} | "
                    f"{ns(t(f'phase/{m}/kkt_lu'))} | {ns(t(f'baseline/{m}/dynamic_kkt') - terms)} |")
+    return out + flop_rates(t, phased, kernels)
+
+
+def size_of(m):
+    """(N, P) from a system's name, e.g. chain_16x8 -> (16, 8)."""
+    n, p = m.rsplit("_", 1)[1].split("x")
+    return int(n), int(p)
+
+
+def kernel_flops(k, n, p):
+    """Flops of one kernel of the general case's solve, as the table above counts them; `rest`: the
+    right-hand sides and products (a = A^-1 (Q - f), D a, G^-1 on two right sides, B^T w, L y, L^-T,
+    the residual D q''): about 5 N^2 + 8 N P + 4 P^2."""
+    return {"mass_cholesky": n ** 3 / 3, "constraint_solve": n * n * p, "gram": 2 * n * p * p,
+            "gram_cholesky": p ** 3 / 3, "gram_inverse": p ** 3 / 3, "rest": 5 * n * n + 8 * n * p + 4 * p * p,
+            "kkt_lu": 2 * (n + p) ** 3 / 3}[k]
+
+
+def flop_rates(t, phased, kernels):
+    """Each kernel's flop rate beside the KKT LU's, and where the general target is missed, the kernel
+    that holds the most time (the one at fault) with its rate."""
+    out = ["", "Flop rates of the same kernels (GFlop/s: the kernel's flop count over its time; `rest` from "
+           "its count 5 N^2 + 8 N P + 4 P^2 over its time), beside the KKT LU's. The general case needs about "
+           "half the KKT's flops (N^3/3 + N^2 P + 2 N P^2 + 2 P^3/3 against 2 (N + P)^3/3), so it is 2x faster "
+           "only where its kernels run at the LU's rate and the model's terms are small beside both.", "",
+           "| system | " + " | ".join(kernels) + " | rest | kkt_lu | general / KKT (row) | kernel at fault |",
+           "|---|" + "---|" * (len(kernels) + 4)]
+    for m in phased:
+        n, p = size_of(m)
+        general, terms = general_time(t, m), t(f"baseline/{m}/model_terms")
+        scalar = p == 1
+        times = {k: (math.nan if scalar and k in ("gram_cholesky", "gram_inverse") else t(f"phase/{m}/{k}"))
+                 for k in kernels}
+        times["rest"] = general - terms - sum(v for v in times.values() if not math.isnan(v))
+        times["kkt_lu"] = t(f"phase/{m}/kkt_lu")
+
+        def rate(k):
+            v = times[k]
+            return "-" if math.isnan(v) or v <= 0 else f"{kernel_flops(k, n, p) / v:.2f}"
+
+        speedup = t(f"baseline/{m}/dynamic_kkt") / general
+        fault = ""
+        if speedup < 2:
+            worst = max((k for k in times if k != "kkt_lu" and not math.isnan(times[k])), key=lambda k: times[k])
+            fault = (f"`{worst}`: {ns(times[worst])}, {100 * times[worst] / (general - terms):.0f} % of the solve, "
+                     f"{rate(worst)} GFlop/s")
+        out.append(f"| {m} | " + " | ".join(rate(k) for k in kernels) + f" | {rate('rest')} | {rate('kkt_lu')} "
+                   f"| {speedup:.2f}x | {fault} |")
     return out
 
 
@@ -392,6 +440,41 @@ def transport(d):
         out += ["## The same at 10 kHz with a fixed-step plant (one RK4 step per period)",
                 "", "What a user running a plant in real time would choose: the Duffing scene with "
                 "`integrator={method: rk4, step: 1.0e-4}` instead of dopri5 at 1e-10."] + demote(demote(body))
+        out += integration_load(d)
+    chain = os.path.join(d, "loop_vs_floor_chain8", "README.md")
+    if os.path.exists(chain):
+        with open(chain) as f:
+            body = f.read().split("\n", 1)[1]
+        out += ["## The 8-mass chain at 10 kHz", "", "Eight coordinates and four tracked rows, the plant "
+                "integrated by its scene's dopri5 at 1e-10 each period."] + demote(demote(body))
+    return out
+
+
+def integration_load(d):
+    """Whether the plant's integration is the load at 10 kHz: its loop thread's CPU time per period
+    with dopri5 at 1e-10 (the scene's) and with one RK4 step, case by case, from the same run."""
+    runs = {}
+    for name in ("loop_vs_floor", "loop_vs_floor_rk4"):
+        doc = load(os.path.join(d, name), "loop_vs_floor.json")
+        for r in doc or []:
+            if "error" in r or r.get("rate_hz") != 10000:
+                continue
+            main = (r.get("loop_threads") or {}).get("plant", {}).get("main")
+            if main and main.get("threads"):
+                key = (r["scheduler"], "1 hog" if r["hog"] else "quiet")
+                runs.setdefault(key, {})[name] = 1e3 * main["cpu_ms"] / max(r["loop_periods"], 1)
+    rows = [(k, v) for k, v in runs.items() if len(v) == 2]
+    if not rows:
+        return []
+    out = ["", "#### Is the plant's integration the load?", "",
+           "The plant's loop thread's CPU time per period at 10 kHz (wake-up, the socket's messages, the "
+           "state's publication, the integration over the period, the sleep), the scene's dopri5 at 1e-10 "
+           "beside one RK4 step; the difference is what the adaptive integration costs per period.", "",
+           "| scheduler | load | dopri5 1e-10 [us per period] | RK4 step [us per period] | difference |",
+           "|---|---|---|---|---|"]
+    for (sched, load_), v in rows:
+        a, b = v["loop_vs_floor"], v["loop_vs_floor_rk4"]
+        out.append(f"| {sched} | {load_} | {a:.1f} | {b:.1f} | {a - b:+.1f} |")
     return out
 
 

@@ -4,8 +4,9 @@ scheduler (default; --realtime with the two processes on two CPUs, and on one) a
 (a bare clock_nanosleep loop in the manner of cyclictest, then bare LCM and raw UDP round trips
 paced at the same rate and scheduling), then `gausstrack-run` on the Duffing scene at that rate.
 Writes OUT/loop_vs_floor.json, the programs' outputs, and OUT/README.md with the table and the
-targets (the loop's round trip within 1.2x of bare LCM at the same pace; its deadline misses and
-wake-up lateness within 1.2x of the floor's; --realtime never worse than the default scheduler).
+targets (the loop's round trip within 1.2x of bare LCM at the same pace; its deadline misses within
+2x of the floor's and its wake-up lateness within 1.2x; --realtime never worse than the default
+scheduler).
 
 usage: loop_vs_floor.py BIN_DIR SCENE OUT [--seconds S] [--rates 1000,10000] [--no-hog]
                         [--schedulers default,realtime,realtime_1cpu] [--set KEY=VALUE ...]
@@ -254,8 +255,8 @@ def report(rows, out, seconds, scene="", sets=()):
         target("loop round trip <= 1.2x bare LCM at the same pace (p50)", case, f"{x:.2f}x", x <= 1.2)
         fm = max(r["floor_misses"] or 0, 0) / r["periods"]
         lm = (r["loop_misses"] or 0) / r["loop_periods"]
-        target("loop deadline misses <= 1.2x the floor's (per period)", case, f"{lm:.2e} vs {fm:.2e}",
-               lm <= 1.2 * fm or lm == 0)
+        target("loop deadline misses <= 2x the floor's (per period)", case, f"{lm:.2e} vs {fm:.2e}",
+               lm <= 2 * fm or lm == 0)
         x = ratio(r["loop_wake_us"]["p99"], r["floor_wake_us"]["p99"])
         target("loop wake-up lateness <= 1.2x the floor's (p99)", case, f"{x:.2f}x", x <= 1.2)
     for r in ok_rows:
