@@ -131,10 +131,8 @@ def command_lines(args, out):
     if args.realtime:
         cpus = os.cpu_count() or 1
         plant_cpu, controller_cpu = args.cpus or (cpus - 1, max(0, cpus - 2))
-        # The plant one level above the controller: where both share a CPU, the plant's period
-        # starts at its deadline rather than after the controller's answer in progress.
-        for name, cpu, priority in (("plant", plant_cpu, 80), ("controller", controller_cpu, 79)):
-            own[name] += ["--rt-priority", str(priority), "--lock-memory", "--cpu", str(cpu)]
+        for name, cpu in (("plant", plant_cpu), ("controller", controller_cpu)):
+            own[name] += ["--rt-priority", "80", "--lock-memory", "--cpu", str(cpu)]
     part_logs = []
     if args.log:
         if os.path.exists(args.log):
