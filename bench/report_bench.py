@@ -231,14 +231,24 @@ def phases(b, models):
            "|---|" + "---|" * (len(kernels) + 4)]
     for m in phased:
         general, terms = general_time(t, m), t(f"baseline/{m}/model_terms")
-        scalar = m.endswith("x1")  # P = 1: no Gram Cholesky nor inverse factor in the law
-        parts = [math.nan if scalar and k in ("gram_cholesky", "gram_inverse") else t(f"phase/{m}/{k}")
-                 for k in kernels]
-        rest = general - terms - sum(v for v in parts if not math.isnan(v))
-        out.append(f"| {m} | " + " | ".join("-" if math.isnan(v) else ns(v) for v in parts)
-                   + f" | {ns(rest)} | {ns(general - terms)} | "
-                   f"{ns(t(f'phase/{m}/kkt_lu'))} | {ns(t(f'baseline/{m}/dynamic_kkt') - terms)} |")
+        times = phase_times(t, m, kernels)
+        out.append(f"| {m} | " + " | ".join("-" if math.isnan(times[k]) else ns(times[k]) for k in kernels)
+                   + f" | {ns(times['rest'])} | {ns(general - terms)} | "
+                   f"{ns(times['kkt_lu'])} | {ns(t(f'baseline/{m}/dynamic_kkt') - terms)} |")
     return out + flop_rates(t, phased, kernels)
+
+
+def phase_times(t, m, kernels):
+    """The time of each kernel of the general case's solve for system m (NaN where the law does not
+    run it: with P = 1 a scalar path replaces the Gram Cholesky and its inverse factor), `rest` (the
+    general row's solve less those kernels) and the KKT LU's."""
+    scalar = m.endswith("x1")
+    times = {k: (math.nan if scalar and k in ("gram_cholesky", "gram_inverse") else t(f"phase/{m}/{k}"))
+             for k in kernels}
+    solve = general_time(t, m) - t(f"baseline/{m}/model_terms")
+    times["rest"] = solve - sum(v for v in times.values() if not math.isnan(v))
+    times["kkt_lu"] = t(f"phase/{m}/kkt_lu")
+    return times
 
 
 def size_of(m):
@@ -268,11 +278,7 @@ def flop_rates(t, phased, kernels):
     for m in phased:
         n, p = size_of(m)
         general, terms = general_time(t, m), t(f"baseline/{m}/model_terms")
-        scalar = p == 1
-        times = {k: (math.nan if scalar and k in ("gram_cholesky", "gram_inverse") else t(f"phase/{m}/{k}"))
-                 for k in kernels}
-        times["rest"] = general - terms - sum(v for v in times.values() if not math.isnan(v))
-        times["kkt_lu"] = t(f"phase/{m}/kkt_lu")
+        times = phase_times(t, m, kernels)
 
         def rate(k):
             v = times[k]
