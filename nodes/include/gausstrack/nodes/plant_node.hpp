@@ -247,11 +247,8 @@ class PlantNode {
     }
     if (!o_.lockstep && counts_.states_published == 0) return start_real_time(period, t, q, qd, u);
     if (!o_.lockstep) {
-      // One timed wake-up per period, at its deadline: take what has already arrived without
-      // waiting (a timed wait for each message costs a timer's wake-up, which on a virtual machine
-      // is most of a 100 us period), sleep until the deadline, take what came meanwhile, apply the
-      // answer due and publish the state. A command's round trip is its receive timestamp, so
-      // taking it at the deadline rather than on arrival changes no figure.
+      // One timed wake-up per period (see the file comment): take what has arrived, sleep until
+      // the deadline, take what came meanwhile, apply the answer due and publish the state.
       take_arrived(scheduler_.deadline(period) - scheduler_.period_ns() / 4);
       const std::int64_t now = scheduler_.wait_for(period);
       for (int i = 0; i < kMaxPerPeriod && lcm_.handleTimeout(0) > 0; ++i) {
