@@ -363,10 +363,12 @@ TEST(HardCases, InconsistentRowsAreReportedWhenTheScaleOverflows) {
 // entries near the range limit for which B = D L^-T is finite but its complete orthogonal
 // decomposition is not. Expectation: kNonFiniteResult with zero outputs, not an answer.
 TEST(HardCases, OverflowingDecompositionIsANonFiniteResult) {
-  // The finding's numbers, each matrix column by column.
+  // The finding's numbers, each matrix column by column, but for A_33: the finding's A (equal
+  // A_22, A_32, A_33) is indefinite, det A = -A_22 (A_21 - A_31)^2 / A_11 < 0, and a factorization
+  // may reject it or not by rounding; doubling A_33 makes it positive definite.
   const double a[] = {0x0.64d0006000000p-1022, 0x0.100ff00000000p-1022, 0x1.effffffffffffp-1008,
                       0x1.d4d4d4d000001p+213,  0x1.d4d4d4d4d4d4dp+213,  0x1.d4d4d4d4d4d4dp+213,
-                      0x1.d4d4d4d4d4d4dp+213,  0x1.d4d4d4d4d4d4dp+213,  0x1.d4d4d4d4d4d4dp+213};
+                      0x1.d4d4d4d4d4d4dp+213,  0x1.d4d4d4d4d4d4dp+213,  0x1.d4d4d4d4d4d4dp+214};
   const double d[] = {0x1.d4d4d00000100p+213, 0x1.d4d4d4d4d4d4dp+213, 0x1.a2a2a2a2a2a2ap-349,
                       0x1.a2a2a2a2a2a2ap-1021, 0x0.0000200550000p-1022, 0x1.d4d4d2a2a2a00p+213};
   const Eigen::Matrix3d A = Eigen::Map<const Eigen::Matrix3d>(a);

@@ -684,7 +684,7 @@ class ActuatedController {
       return true;
     } else {
       l_ = terms_.mass_matrix;
-      return small_dense::cholesky_in_place(l_);
+      return small_dense::cholesky_in_place(l_, l_inv_diag_.data());
     }
   }
   template <int Cols>
@@ -692,14 +692,14 @@ class ActuatedController {
     if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal)
       scale_rows(l_inv_diag_, x);
     else
-      small_dense::solve_lower_in_place(l_, x);
+      small_dense::solve_lower_in_place(l_, l_inv_diag_.data(), x);
   }
   template <int Cols>
   void solve_lt(Eigen::Matrix<Scalar, N, Cols>& x) const noexcept {  // x = L^-T x
     if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal)
       scale_rows(l_inv_diag_, x);
     else
-      small_dense::solve_lower_transposed_in_place(l_, x);
+      small_dense::solve_lower_transposed_in_place(l_, l_inv_diag_.data(), x);
   }
   template <int Cols>
   void multiply_l(Eigen::Matrix<Scalar, N, Cols>& x) const noexcept {  // x = L x
@@ -755,7 +755,7 @@ class ActuatedController {
   Eigen::Matrix<Scalar, N, N> l_ =
       Eigen::Matrix<Scalar, N, N>::Zero();  // A = L L^T (lower triangle)
   VectorN l_diag_ = VectorN::Zero(),
-          l_inv_diag_ = VectorN::Zero();  // a declared-diagonal A's L, L^-1
+          l_inv_diag_ = VectorN::Zero();  // a declared-diagonal A's L and L^-1; 1 / L_kk for a dense A
   HoldPrediction<N, Scalar> prediction_;  ///< the hold's memory
   static constexpr std::array<int, static_cast<std::size_t>(kTask)> kTaskRows =
       detail::rows_of_kind<M, false, kTask>();

@@ -361,7 +361,7 @@ class ConstraintSolver {
     } else {
       if (options_.reuse_factorization) mass_key_ = A;  // only compared when kept
       mass_l_ = A;
-      return small_dense::cholesky_in_place(mass_l_);
+      return small_dense::cholesky_in_place(mass_l_, mass_reciprocal_.data());
     }
   }
   void set_bt(const MatrixPN& D) noexcept {  // B^T = L^-1 D^T
@@ -371,14 +371,14 @@ class ConstraintSolver {
       for (int i = 0; i < P; ++i)
         for (int j = 0; j < N; ++j) bt_(j, i) *= inverse_sqrt_mass_(j);
     } else {
-      small_dense::solve_lower_in_place(mass_l_, bt_);
+      small_dense::solve_lower_in_place(mass_l_, mass_reciprocal_.data(), bt_);
     }
   }
   void solve_l_in_place(VectorN& x) const noexcept {  // x = L^-1 x
     if constexpr (kMass == MassMatrix::kDiagonal) {
       for (int i = 0; i < N; ++i) x(i) *= inverse_sqrt_mass_(i);
     } else {
-      small_dense::solve_lower_in_place(mass_l_, x);
+      small_dense::solve_lower_in_place(mass_l_, mass_reciprocal_.data(), x);
     }
   }
   template <int K>
@@ -396,7 +396,7 @@ class ConstraintSolver {
       for (int k = 0; k < K; ++k)
         for (int i = 0; i < N; ++i) x(i, k) *= inverse_sqrt_mass_(i);
     } else {
-      small_dense::solve_lower_transposed_in_place(mass_l_, x);
+      small_dense::solve_lower_transposed_in_place(mass_l_, mass_reciprocal_.data(), x);
     }
   }
 
@@ -618,6 +618,7 @@ class ConstraintSolver {
   SolveDiagnostics<Scalar> factor_diagnostics_;  // what factorize reported
   Scalar reach_seen_ = Scalar(0);                // the largest sigma_max computed (kVanishingReach)
   MatrixNN mass_l_ = MatrixNN::Identity();       // A = L L^T, lower triangle (dense)
+  VectorN mass_reciprocal_ = VectorN::Ones();     // 1 / L_kk (dense)
   MatrixNP bt_ = MatrixNP::Zero();               // B^T = L^-1 D^T
   MatrixPP gram_l_inv_ = MatrixPP::Identity();   // L^-1 for B B^T + lambda^2 I = L L^T
   MatrixNP svd_u_ = MatrixNP::Zero();            // B^T = U S V^T (kSvd)

@@ -87,60 +87,110 @@ void multiply(const Scalar* m, int rows, int cols, const Scalar* x, Scalar* y) n
 }
 
 /// In place, the lower triangle of the symmetric positive definite `m` (its upper triangle is not
-/// read) becomes L with m = L L^T. Right-looking: step k scales column k and updates the columns
-/// to its right. Returns false, as Eigen's LLT does, when a pivot is <= 0 (not positive definite);
-/// a NaN pivot is not detected here (the factor comes out non-finite; the caller checks that).
+/// read) becomes L with m = L L^T, and reciprocal[k] = 1 / L_kk. The recurrence is that of
+/// m = L_1 P L_1^T (L_1 unit lower triangular, P the pivots), so that the chain from one pivot to
+/// the next holds a division but no square root; L = L_1 P^(1/2) is formed at the end, its square
+/// roots independent of each other. Right-looking, two columns per step: the 2 x 2 diagonal block,
+/// both columns scaled by their pivots' reciprocals, then one rank-2 update of the columns to their
+/// right (each entry of a trailing column loaded and stored once per two columns). Returns false,
+/// as Eigen's LLT does, when a pivot is <= 0 (not positive definite); a NaN pivot is not detected
+/// here (the factor comes out non-finite; the caller checks that).
 template <typename Scalar, int N>
-bool cholesky_in_place(Eigen::Matrix<Scalar, N, N>& m) noexcept {
+bool cholesky_in_place(Eigen::Matrix<Scalar, N, N>& m, Scalar* reciprocal) noexcept {
   Scalar* a = m.data();
-  for (int k = 0; k < N; ++k) {
-    Scalar* ck = a + k * N;
-    if (ck[k] <= Scalar(0)) return false;
-    const Scalar d = std::sqrt(ck[k]);
-    ck[k] = d;
-    // Divided by d, as Eigen's LLT does, rather than multiplied by 1 / d (one rounding, not two:
-    // a borderline matrix at the range's ends is then judged as Eigen judges it).
-    for (int i = k + 1; i < N; ++i) ck[i] /= d;
-    for (int j = k + 1; j < N; ++j) {
-      Scalar* cj = a + j * N;
-      const Scalar ljk = ck[j];
-      for (int i = j; i < N; ++i) cj[i] -= ck[i] * ljk;
+  Scalar inverse_pivot[N];
+  for (int k = 0; k + 1 < N; k += 2) {
+    Scalar* c0 = a + k * N;
+    Scalar* c1 = c0 + N;
+    const Scalar p0 = c0[k];
+    if (!(p0 > Scalar(0))) return false;
+    const Scalar r0 = Scalar(1) / p0;
+    const Scalar w1 = c0[k + 1];
+    const Scalar l10 = w1 * r0;
+    const Scalar p1 = c1[k + 1] - l10 * w1;
+    if (!(p1 > Scalar(0))) return false;
+    const Scalar r1 = Scalar(1) / p1;
+    inverse_pivot[k] = r0;
+    inverse_pivot[k + 1] = r1;
+    c0[k + 1] = l10;
+    c1[k + 1] = p1;
+    for (int i = k + 2; i < N; ++i) {  // column k + 1 after column k's update, then both scaled
+      const Scalar w = c0[i];
+      const Scalar u = c1[i] - w * l10;
+      c0[i] = w * r0;
+      c1[i] = u * r1;
     }
+    for (int j = k + 2; j < N; ++j) {  // m_ij -= (L_1)_ik p0 (L_1)_jk + (L_1)_i,k+1 p1 (L_1)_j,k+1
+      Scalar* cj = a + j * N;
+      const Scalar wj = c0[j] * p0, uj = c1[j] * p1;
+      for (int i = j; i < N; ++i) cj[i] -= c0[i] * wj + c1[i] * uj;
+    }
+  }
+  if constexpr (N % 2 == 1) {  // the last pivot alone
+    const Scalar p = a[(N - 1) * N + (N - 1)];
+    if (!(p > Scalar(0))) return false;
+    inverse_pivot[N - 1] = Scalar(1) / p;
+  }
+  for (int j = 0; j < N; ++j) {  // L = L_1 P^(1/2)
+    Scalar* cj = a + j * N;
+    const Scalar s = std::sqrt(cj[j]);
+    cj[j] = s;
+    reciprocal[j] = inverse_pivot[j] * s;
+    for (int i = j + 1; i < N; ++i) cj[i] *= s;
   }
   return true;
 }
 
-/// x = L^-1 x for every column of x (forward substitution, column-oriented).
+template <typename Scalar, int N>
+bool cholesky_in_place(Eigen::Matrix<Scalar, N, N>& m) noexcept {
+  Scalar reciprocal[N];
+  return cholesky_in_place(m, reciprocal);
+}
+
+/// reciprocal[k] = 1 / L_kk: what the solves below take (the Cholesky above gives it).
+template <typename Scalar, int N>
+void reciprocal_diagonal(const Eigen::Matrix<Scalar, N, N>& l, Scalar* reciprocal) noexcept {
+  for (int k = 0; k < N; ++k) reciprocal[k] = Scalar(1) / l(k, k);
+}
+
+
+/// x = L^-1 x for every column of x (forward substitution, column-oriented), reciprocal[k] =
+/// 1 / L_kk.
 template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
-void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l,
+void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* reciprocal,
                           Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
   static_assert(N == 1 || K == 1 || !(Options & Eigen::RowMajor), "column-major right sides");
   const Scalar* a = l.data();
-  Scalar inverse[N];  // independent divisions up front: only multiplications on the dependent path
-  for (int k = 0; k < N; ++k) inverse[k] = Scalar(1) / a[k * N + k];
   for (int k = 0; k < N; ++k) {  // step k for every column: independent chains side by side
     const Scalar* ck = a + k * N;
     for (int c = 0; c < K; ++c) {
       Scalar* xc = x.data() + c * N;
-      const Scalar v = xc[k] * inverse[k];
+      const Scalar v = xc[k] * reciprocal[k];
       xc[k] = v;
       for (int i = k + 1; i < N; ++i) xc[i] -= ck[i] * v;
     }
   }
 }
 
-/// x = L^-T x for every column of x (back substitution: dot products down L's columns). Each
+template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
+void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l,
+                          Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
+  Scalar reciprocal[N];
+  reciprocal_diagonal(l, reciprocal);
+  solve_lower_in_place(l, reciprocal, x);
+}
+
+/// x = L^-T x for every column of x (back substitution: dot products down L's columns),
+/// reciprocal[k] = 1 / L_kk. Each
 /// unknown's sum runs from the last row up in two partial sums and takes the newest unknown,
 /// x_(k+1), last: the terms of the older unknowns are summed while x_(k+1) is still being
 /// computed, so the dependent path from one unknown to the next is one multiply-add, a
 /// subtraction and a multiplication rather than the whole sum.
 template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
-void solve_lower_transposed_in_place(const Eigen::Matrix<Scalar, N, N>& l,
+void solve_lower_transposed_in_place(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* reciprocal,
                                      Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
   static_assert(N == 1 || K == 1 || !(Options & Eigen::RowMajor), "column-major right sides");
   const Scalar* a = l.data();
-  Scalar inverse[N];
-  for (int k = 0; k < N; ++k) inverse[k] = Scalar(1) / a[k * N + k];
   for (int c = 0; c < K; ++c) {
     Scalar* xc = x.data() + c * N;
     for (int k = N - 1; k >= 0; --k) {
@@ -154,9 +204,17 @@ void solve_lower_transposed_in_place(const Eigen::Matrix<Scalar, N, N>& l,
       if (i == k + 2) s0 += ck[i] * xc[i];
       Scalar s = xc[k] - (s0 + s1);
       if (k + 1 < N) s -= ck[k + 1] * xc[k + 1];
-      xc[k] = s * inverse[k];
+      xc[k] = s * reciprocal[k];
     }
   }
+}
+
+template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
+void solve_lower_transposed_in_place(const Eigen::Matrix<Scalar, N, N>& l,
+                                     Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
+  Scalar reciprocal[N];
+  reciprocal_diagonal(l, reciprocal);
+  solve_lower_transposed_in_place(l, reciprocal, x);
 }
 
 /// x = L x for every column of x. Step k (from the last) reads x_k before any later step changes
