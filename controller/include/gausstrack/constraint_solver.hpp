@@ -211,10 +211,9 @@ class ConstraintSolver {
   /// right side (P): the part of Q' due to a term added to g. Zero if the last solve failed.
   VectorN force_for_rhs(const VectorP& rhs) const noexcept {
     if (!ready_) return VectorN::Zero();
-    VectorN y;
-    apply_pseudo_inverse(rhs, y);
-    apply_l_in_place(y);
-    return y;
+    VectorN y, force;
+    apply_pseudo_inverse(rhs, y, force);
+    return force;
   }
 
  private:
@@ -237,19 +236,18 @@ class ConstraintSolver {
       rhs(i, 0) = -small_dense::dot(bt_.data() + i * N, u.data(), N);  // -(B u)_i = -(D a)_i
       rhs(i, 1) = g(i);
     }
-    Eigen::Matrix<Scalar, N, 2> y;
-    apply_pseudo_inverse(rhs, y);
+    Eigen::Matrix<Scalar, N, 2> y, force;
+    apply_pseudo_inverse(rhs, y, force);
 
     Eigen::Matrix<Scalar, N, 2> w;  // [u, u + y], then L^-T of both: [a, q'']
     for (int i = 0; i < N; ++i) {
       w(i, 0) = u(i);
       w(i, 1) = u(i) + (y(i, 0) + y(i, 1));
     }
-    apply_l_in_place(y);  // L y
     for (int i = 0; i < N; ++i) {
-      out.force_from_impressed(i) = y(i, 0);
-      out.force_from_rhs(i) = y(i, 1);
-      out.constraint_force(i) = y(i, 0) + y(i, 1);
+      out.force_from_impressed(i) = force(i, 0);
+      out.force_from_rhs(i) = force(i, 1);
+      out.constraint_force(i) = force(i, 0) + force(i, 1);
     }
     solve_lt_in_place(w);
     for (int i = 0; i < N; ++i) {
@@ -558,23 +556,31 @@ class ConstraintSolver {
     diag.condition_estimate = rank_ > 0 ? hi / lo : Scalar(0);
   }
 
-  // y = B^+ r for K right sides, with the factorization `factorize` chose.
+  // y = B^+ r and the constraint force L y for K right sides, with the factorization `factorize`
+  // chose. On the normal equations B^+ = B^T G^-1, so L y = L L^-1 D^T G^-1 r = D^T w with
+  // w = G^-1 r (the constraints' multipliers): a product with D (N P) rather than with L (N^2).
   template <int K>
-  void apply_pseudo_inverse(const Eigen::Matrix<Scalar, P, K>& r,
-                            Eigen::Matrix<Scalar, N, K>& y) const noexcept {
+  void apply_pseudo_inverse(const Eigen::Matrix<Scalar, P, K>& r, Eigen::Matrix<Scalar, N, K>& y,
+                            Eigen::Matrix<Scalar, N, K>& force) const noexcept {
     switch (used_) {
       case InverseStrategy::kCholeskyWithFallback:
       case InverseStrategy::kDampedLeastSquares: {
+        Eigen::Matrix<Scalar, P, K> w = r;  // w = G^-1 r = L^-T L^-1 r
         if constexpr (P == 1) {
-          for (int k = 0; k < K; ++k) {
-            const Scalar c = r(0, k) * inverse_gram_;
-            for (int i = 0; i < N; ++i) y(i, k) = bt_(i, 0) * c;
-          }
+          for (int k = 0; k < K; ++k) w(0, k) *= inverse_gram_;
         } else {
-          Eigen::Matrix<Scalar, P, K> w = r;  // w = G^-1 r = L^-T L^-1 r
           small_dense::multiply_lower_in_place(gram_l_inv_, w);
           small_dense::multiply_lower_transposed_in_place(gram_l_inv_, w);
-          for (int k = 0; k < K; ++k) small_dense::multiply(bt_.data(), N, P, w.data() + k * P, y.data() + k * N);
+        }
+        for (int k = 0; k < K; ++k) {  // y = B^T w down B^T's columns; force = D^T w, dot products
+          for (int i = 0; i < N; ++i) y(i, k) = bt_(i, 0) * w(0, k);
+          for (int j = 1; j < P; ++j)
+            for (int i = 0; i < N; ++i) y(i, k) += bt_(i, j) * w(j, k);
+          for (int i = 0; i < N; ++i) {
+            Scalar sum(0);
+            for (int j = 0; j < P; ++j) sum += d_key_(j, i) * w(j, k);
+            force(i, k) = sum;
+          }
         }
         return;
       }
@@ -591,7 +597,7 @@ class ConstraintSolver {
             for (int j = 0; j < N; ++j) y(j, k) += svd_u_(j, i) * c;
           }
         }
-        return;
+        break;
       }
       case InverseStrategy::kCompleteOrthogonal: {
         Scalar column[P], work[P];
@@ -601,9 +607,11 @@ class ConstraintSolver {
           small_dense::solve_complete_orthogonal(cod_, column, answer, work);
           for (int i = 0; i < N; ++i) y(i, k) = answer[i];
         }
-        return;
+        break;
       }
     }
+    force = y;
+    apply_l_in_place(force);
   }
 
   Options options_;
