@@ -29,9 +29,11 @@ def load(d, name):
 
 
 def benchmarks(doc):
-    """name -> (median real time [ns], counters) from a Google Benchmark JSON with repetitions."""
+    """name -> (median real time [ns], counters) from a Google Benchmark JSON with repetitions, in
+    the order the benchmarks were registered (repetitions run interleaved at random)."""
     runs = {}
-    for b in doc["benchmarks"]:
+    order = lambda b: (b.get("family_index", 0), b.get("per_family_instance_index", 0))
+    for b in sorted(doc["benchmarks"], key=order):
         name = b.get("run_name", b["name"])
         if b.get("run_type") == "aggregate":
             if b.get("aggregate_name") == "median":
