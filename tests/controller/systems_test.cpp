@@ -2,7 +2,10 @@
 // hand-written ones (hand_written_systems.hpp) for every shipped system, random nonlinear
 // constraints agree with finite differences, the model checker passes good models and names
 // what is wrong with a bad one, and the paper's systems keep their physics.
+#include <algorithm>
+#include <array>
 #include <random>
+#include <vector>
 
 #include "gausstrack/consistent_state.hpp"
 #include "gausstrack/model_check.hpp"
@@ -133,6 +136,61 @@ TEST(NaturalForm, RandomNonlinearConstraintsAgainstFiniteDifferences) {
     EXPECT_NEAR(-terms.constraint_rhs(2), psi_rate, 1e-8 * (1 + std::abs(psi_rate)));
     EXPECT_EQ(terms.constraint_error(2), 0.0);
     EXPECT_NEAR(terms.constraint_error_rate(2), psi(q, qd, t), 1e-15 * (1 + std::abs(psi(q, qd, t))));
+  }
+}
+
+// Jets store their gradients on an interval of coordinates: rows whose terms touch coordinates
+// far apart (a gap between two supports), one coordinate, or t alone through a factor, against
+// finite differences, with the entries outside every support exactly zero.
+struct Sparse {
+  using Scalar = double;
+  static constexpr int kDof = 7;
+  static constexpr int kConstraints = 3;
+  static constexpr int kHolonomicRows = 3;
+  using V = Eigen::Matrix<double, 7, 1>;
+  void evaluate(const V&, const V&, double, ModelTerms<7, 3, double>& terms) const noexcept {
+    terms.mass_matrix.setIdentity();
+  }
+  template <typename T>
+  Eigen::Matrix<T, 3, 1> phi(const Eigen::Matrix<T, 7, 1>& q, const T& t) const {
+    using std::sin, std::exp, std::cos;
+    const T s = T(0.5) * exp(-T(2) * t) * sin(T(3) * t);  // t alone: no gradient
+    return {q(1) * sin(q(5)) - s,                         // {1, 5}: a gap of three
+            s * q(3) + cos(t) * q(3) * q(3),              // {3}, scaled by functions of t
+            (q(6) - q(0)) / (T(2) + s) + q(2) * q(2) * s - (q(2) - q(2))};  // {0, 2, 6}
+  }
+};
+static_assert(Model<Sparse>);
+
+TEST(NaturalForm, SparseGradientsAgainstFiniteDifferences) {
+  RandomSource<double> rng(4);
+  const Sparse m;
+  const std::array<std::vector<int>, 3> support{{{1, 5}, {3}, {0, 2, 6}}};
+  for (int it = 0; it < 200; ++it) {
+    const Eigen::Matrix<double, 7, 1> q = rng.matrix<7, 1>(), qd = rng.matrix<7, 1>();
+    const double t = rng.uniform(0, 2), h = 1e-5;
+    TermsOf<Sparse> terms;
+    terms.constraint_matrix.setConstant(7.0);  // every entry must be written
+    evaluate_model(m, q, qd, t, terms);
+    auto phi = [&](const Eigen::Matrix<double, 7, 1>& x, double s) { return Eigen::Vector3d(m.phi(x, s)); };
+    for (int j = 0; j < 7; ++j) {
+      const Eigen::Matrix<double, 7, 1> dq = h * Eigen::Matrix<double, 7, 1>::Unit(j);
+      const Eigen::Vector3d dphi = (phi(q + dq, t) - phi(q - dq, t)) / (2 * h);
+      for (int k = 0; k < 3; ++k) {
+        const auto& in = support[static_cast<std::size_t>(k)];
+        if (std::find(in.begin(), in.end(), j) == in.end()) {
+          ASSERT_EQ(terms.constraint_matrix(k, j), 0.0) << "row " << k << " column " << j;
+        } else {
+          ASSERT_NEAR(terms.constraint_matrix(k, j), dphi(k), 1e-8 * (1 + std::abs(dphi(k))));
+        }
+      }
+    }
+    auto phi_along = [&](double s) { return phi(q + qd * s, t + s); };
+    const Eigen::Vector3d first = (phi_along(h) - phi_along(-h)) / (2 * h);
+    const double hh = 1e-4;
+    const Eigen::Vector3d second = (phi_along(hh) - 2 * phi_along(0) + phi_along(-hh)) / (hh * hh);
+    EXPECT_TRUE(near(Eigen::Vector3d(terms.constraint_error_rate), first, 1e-8, 1 + inf_norm(first), "e'"));
+    EXPECT_TRUE(near(Eigen::Vector3d(-terms.constraint_rhs), second, 1e-5, 1 + inf_norm(second), "g"));
   }
 }
 

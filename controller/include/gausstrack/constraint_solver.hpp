@@ -330,9 +330,9 @@ class ConstraintSolver {
   // --- The mass matrix's factor L (A = L L^T), dense or diagonal. ---
   bool mass_equals(const MatrixNN& A) const noexcept {
     if constexpr (kMass == MassMatrix::kDiagonal) {
-      for (int i = 0; i < N; ++i)
-        if (!(A(i, i) == mass_diagonal_(i))) return false;
-      return true;
+      bool same = true;
+      for (int i = 0; i < N; ++i) same &= A(i, i) == mass_diagonal_(i);
+      return same;
     } else {
       return small_dense::all_equal(A.data(), mass_key_.data(), N * N);
     }
@@ -362,9 +362,10 @@ class ConstraintSolver {
       return small_dense::cholesky_in_place(mass_l_, mass_reciprocal_.data());
     }
   }
-  void set_bt(const MatrixPN& D) noexcept {  // B^T = L^-1 D^T
+  void set_bt(const MatrixPN& D) noexcept {  // B^T = L^-1 D^T (and D^T, dense)
     for (int i = 0; i < P; ++i)
       for (int j = 0; j < N; ++j) bt_(j, i) = D(i, j);
+    if constexpr (kMass != MassMatrix::kDiagonal) dt_ = bt_;
     if constexpr (kMass == MassMatrix::kDiagonal) {
       for (int i = 0; i < P; ++i)
         for (int j = 0; j < N; ++j) bt_(j, i) *= inverse_sqrt_mass_(j);
@@ -557,33 +558,46 @@ class ConstraintSolver {
   }
 
   // y = B^+ r and the constraint force L y for K right sides, with the factorization `factorize`
-  // chose. On the normal equations B^+ = B^T G^-1, so L y = L L^-1 D^T G^-1 r = D^T w with
-  // w = G^-1 r (the constraints' multipliers): a product with D (N P) rather than with L (N^2).
+  // chose. On the normal equations B^+ = B^T G^-1, so with w = G^-1 r (the constraints'
+  // multipliers) y = B^T w and L y = L L^-1 D^T w = D^T w: a product with D (N P) rather than with
+  // a dense L (N^2); a diagonal L is N products.
   template <int K>
   void apply_pseudo_inverse(const Eigen::Matrix<Scalar, P, K>& r, Eigen::Matrix<Scalar, N, K>& y,
                             Eigen::Matrix<Scalar, N, K>& force) const noexcept {
+    if (used_ != InverseStrategy::kCholeskyWithFallback && used_ != InverseStrategy::kDampedLeastSquares) {
+      apply_rank_revealing(r, y, force);
+      return;
+    }
+    Eigen::Matrix<Scalar, P, K> w = r;  // w = G^-1 r = L^-T L^-1 r
+    if constexpr (P == 1) {
+      for (int k = 0; k < K; ++k) w(0, k) *= inverse_gram_;
+    } else {
+      small_dense::multiply_lower_in_place(gram_l_inv_, w);
+      small_dense::multiply_lower_transposed_in_place(gram_l_inv_, w);
+    }
+    // y = B^T w and force = D^T w, both down their N x P factors' columns.
+    for (int k = 0; k < K; ++k) {
+      for (int i = 0; i < N; ++i) y(i, k) = bt_(i, 0) * w(0, k);
+      for (int j = 1; j < P; ++j)
+        for (int i = 0; i < N; ++i) y(i, k) += bt_(i, j) * w(j, k);
+      if constexpr (kMass == MassMatrix::kDiagonal) {
+        for (int i = 0; i < N; ++i) force(i, k) = sqrt_mass_(i) * y(i, k);
+      } else {
+        for (int i = 0; i < N; ++i) force(i, k) = dt_(i, 0) * w(0, k);
+        for (int j = 1; j < P; ++j)
+          for (int i = 0; i < N; ++i) force(i, k) += dt_(i, j) * w(j, k);
+      }
+    }
+  }
+
+  // apply_pseudo_inverse with the SVD or the complete orthogonal decomposition: force = L y.
+  template <int K>
+  void apply_rank_revealing(const Eigen::Matrix<Scalar, P, K>& r, Eigen::Matrix<Scalar, N, K>& y,
+                            Eigen::Matrix<Scalar, N, K>& force) const noexcept {
     switch (used_) {
       case InverseStrategy::kCholeskyWithFallback:
-      case InverseStrategy::kDampedLeastSquares: {
-        Eigen::Matrix<Scalar, P, K> w = r;  // w = G^-1 r = L^-T L^-1 r
-        if constexpr (P == 1) {
-          for (int k = 0; k < K; ++k) w(0, k) *= inverse_gram_;
-        } else {
-          small_dense::multiply_lower_in_place(gram_l_inv_, w);
-          small_dense::multiply_lower_transposed_in_place(gram_l_inv_, w);
-        }
-        for (int k = 0; k < K; ++k) {  // y = B^T w down B^T's columns; force = D^T w, dot products
-          for (int i = 0; i < N; ++i) y(i, k) = bt_(i, 0) * w(0, k);
-          for (int j = 1; j < P; ++j)
-            for (int i = 0; i < N; ++i) y(i, k) += bt_(i, j) * w(j, k);
-          for (int i = 0; i < N; ++i) {
-            Scalar sum(0);
-            for (int j = 0; j < P; ++j) sum += d_key_(j, i) * w(j, k);
-            force(i, k) = sum;
-          }
-        }
-        return;
-      }
+      case InverseStrategy::kDampedLeastSquares:
+        break;  // apply_pseudo_inverse
       case InverseStrategy::kSvd: {
         // B^+ r = sum_i u_i (v_i^T r) / s_i over the kept values.
         y.setZero();
@@ -628,6 +642,7 @@ class ConstraintSolver {
   MatrixNN mass_l_ = MatrixNN::Identity();       // A = L L^T, lower triangle (dense)
   VectorN mass_reciprocal_ = VectorN::Ones();     // 1 / L_kk (dense)
   MatrixNP bt_ = MatrixNP::Zero();               // B^T = L^-1 D^T
+  MatrixNP dt_ = MatrixNP::Zero();               // D^T (dense)
   MatrixPP gram_l_inv_ = MatrixPP::Identity();   // L^-1 for B B^T + lambda^2 I = L L^T
   MatrixNP svd_u_ = MatrixNP::Zero();            // B^T = U S V^T (kSvd)
   MatrixPP svd_v_ = MatrixPP::Identity();

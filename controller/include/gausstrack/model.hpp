@@ -134,6 +134,23 @@ concept Model = requires(const M& m, const Eigen::Matrix<typename M::Scalar, M::
   };
 };
 
+namespace detail {
+// Rows [first, first + R) of D: the jets' gradients, zero outside their supports (D is stored by
+// columns, so the rows are cleared a column at a time).
+template <typename S, int N, int P, int R>
+void set_rows(const Eigen::Matrix<Jet<S, N>, R, 1>& x, int first, ModelTerms<N, P, S>& terms) noexcept {
+  if constexpr (!Jet<S, N>::kSparse) {
+    for (int i = 0; i < N; ++i)
+      for (int k = 0; k < R; ++k) terms.constraint_matrix(first + k, i) = x(k).d[i];
+  } else {
+    for (int i = 0; i < N; ++i)
+      for (int k = 0; k < R; ++k) terms.constraint_matrix(first + k, i) = S(0);
+    for (int k = 0; k < R; ++k)
+      for (int i = x(k).lo; i < x(k).hi; ++i) terms.constraint_matrix(first + k, i) = x(k).d[i];
+  }
+}
+}  // namespace detail
+
 /// Holonomic rows of `terms` starting at row `first`, derived from the model's phi by one pass on
 /// jets seeded with d q_i = e_i and the direction (q', 1) in (q, t).
 template <int First, Model M>
@@ -145,16 +162,11 @@ void derive_holonomic_rows(const M& m, const Eigen::Matrix<typename M::Scalar, M
   constexpr int H = RowLayout<M>::kHolonomic;
   using J = Jet<S, N>;
   Eigen::Matrix<J, N, 1> qj;
-  for (int i = 0; i < N; ++i) {
-    qj(i).v = q(i);
-    qj(i).d.setZero();
-    qj(i).d(i) = S(1);
-    qj(i).t1 = qd(i);
-  }
-  const J tj(t, J::Gradient::Zero(), S(1), S(0));
+  for (int i = 0; i < N; ++i) qj(i).seed(q(i), i, qd(i));
+  const J tj(t, S(1), S(0));
   const Eigen::Matrix<J, H, 1> r = m.phi(qj, tj);
+  detail::set_rows(r, First, terms);
   for (int k = 0; k < H; ++k) {
-    terms.constraint_matrix.row(First + k) = r(k).d.transpose();
     terms.constraint_rhs(First + k) = -r(k).t2;
     terms.constraint_error(First + k) = r(k).v;
     terms.constraint_error_rate(First + k) = r(k).t1;
@@ -173,13 +185,13 @@ void derive_nonholonomic_rows(const M& m, const Eigen::Matrix<typename M::Scalar
   using J = Jet<S, N>;
   Eigen::Matrix<J, N, 1> qj, qdj;
   for (int i = 0; i < N; ++i) {
-    qj(i) = J(q(i), J::Gradient::Zero(), qd(i), S(0));
-    qdj(i) = J(qd(i), J::Gradient::Unit(i), S(0), S(0));
+    qj(i) = J(q(i), qd(i), S(0));
+    qdj(i).seed(qd(i), i, S(0));
   }
-  const J tj(t, J::Gradient::Zero(), S(1), S(0));
+  const J tj(t, S(1), S(0));
   const Eigen::Matrix<J, V, 1> r = m.psi(qj, qdj, tj);
+  detail::set_rows(r, First, terms);
   for (int k = 0; k < V; ++k) {
-    terms.constraint_matrix.row(First + k) = r(k).d.transpose();
     terms.constraint_rhs(First + k) = -r(k).t1;
     terms.constraint_error(First + k) = S(0);
     terms.constraint_error_rate(First + k) = r(k).v;

@@ -65,9 +65,9 @@ Scalar dot(const Scalar* x, const Scalar* y, int count) noexcept {
 /// a == b entry by entry (so 0 == -0, and NaN equals nothing).
 template <typename Scalar>
 bool all_equal(const Scalar* a, const Scalar* b, int count) noexcept {
-  for (int i = 0; i < count; ++i)
-    if (!(a[i] == b[i])) return false;
-  return true;
+  bool same = true;  // no early exit: the usual answer is yes, and compares without branches vectorize
+  for (int i = 0; i < count; ++i) same &= a[i] == b[i];
+  return same;
 }
 
 template <typename Scalar>
