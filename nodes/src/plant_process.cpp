@@ -67,6 +67,11 @@ std::optional<int> parse_plant_options(int argc, char** argv, PlantProcessOption
   app.add_option("--watchdog-ms", o.node.watchdog_ms, "apply the safe action after this long without a command")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  app.add_option("--hold-lag", o.node.hold_lag,
+                 "real time: answers act this many periods after their state, fixed (0: one more than the 75th "
+                 "percentile of the measured round trips)")
+      ->check(CLI::Range(0, HoldLag::kMaxLag))
+      ->capture_default_str();
   std::string safe_action = "zero";
   app.add_option("--safe-action", safe_action, "what the watchdog applies: zero force, or hold the last")
       ->check(CLI::IsMember({"zero", "hold"}))

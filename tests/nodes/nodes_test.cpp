@@ -503,7 +503,11 @@ struct PlantFixture : ::testing::Test {
     o.lockstep = lockstep;
     o.rate_hz = 200;
     o.timeout_ms = 200;
-    o.watchdog_ms = 20;
+    // Real time: the answers act a fixed period after their states. Measured (the default), the
+    // lag grows when the machine stalls the test for a period or more between a state and its
+    // answer, and the periods' expected answers with it.
+    o.hold_lag = 1;
+    o.watchdog_ms = 2000;
     o.run_id = 4242;
     o.periods = 64;
     return o;
@@ -729,7 +733,9 @@ TEST_F(PlantFixture, RealTimeHoldsTheNewestAnswerAndNeverAFailedOnesPredecessor)
 }
 
 TEST_F(PlantFixture, RealTimeWatchdogAppliesTheSafeActionThenRecovers) {
-  PlantNode node(lcm, states, "CMD", 1, options(false));
+  PlantNodeOptions o = options(false);
+  o.watchdog_ms = 20;
+  PlantNode node(lcm, states, "CMD", 1, o);
   bool answering = true;
   fake.reply = [&](const plant_state_t&, control_command_t& c) {
     c.force[0] = answering ? 5.0 : kNaN;
@@ -822,6 +828,19 @@ TEST(HoldLag, FollowsTheRoundTripsPercentileNotItsOutliers) {
   HoldLag slow(100'000'000);  // 10 Hz
   slow.record(5'000'000'000);
   EXPECT_EQ(slow.lag(), 10);  // 1 s
+}
+
+TEST(HoldLag, AFixedLagIgnoresTheRoundTrips) {
+  constexpr std::int64_t kPeriod = 1'000'000;
+  HoldLag fixed(kPeriod, 2);
+  EXPECT_EQ(fixed.lag(), 2);
+  for (int i = 0; i < 300; ++i) fixed.record(7 * kPeriod);
+  EXPECT_EQ(fixed.lag(), 2);
+  PlantNodeOptions o;
+  o.hold_lag = HoldLag::kMaxLag + 1;
+  lcm::LCM lcm{"memq://"};
+  Outbox states{lcm, "STATE", nullptr, false};
+  EXPECT_THROW(PlantNode(lcm, states, "CMD", 2, o), std::invalid_argument);
 }
 
 TEST(Watchdog, TripsOncePerOutageAndClearsOnACommand) {

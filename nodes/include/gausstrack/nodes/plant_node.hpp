@@ -15,11 +15,12 @@
 //   (LCM's recv_utime), so when a command is taken off the queue changes no figure. The command
 //   answering state k acts from period k + L (zero-order hold), L the hold lag (HoldLag: one more
 //   than the 75th percentile of recent round trips in whole periods; 1 while they are shorter
-//   than a period). Each state reports L periods as its hold_delay_ns, so the controller knows
-//   the interval its answer acts on. An answer that comes before its period waits for it; at
-//   each period the plant applies the answer due, or when it has not come the newest one older
-//   than it (counted late); when none has come for longer than the watchdog time it applies the
-//   safe action (zero force, or hold the last one) until commands return.
+//   than a period; or fixed by PlantNodeOptions::hold_lag). Each state reports L periods as its
+//   hold_delay_ns, so the controller knows the interval its answer acts on. An answer that comes
+//   before its period waits for it; at each period the plant applies the answer due, or when it
+//   has not come the newest one older than it (counted late); when none has come for longer than
+//   the watchdog time it applies the safe action (zero force, or hold the last one) until
+//   commands return.
 // A command reporting a failed solve is applied as zero force and counted, never ignored in
 // favour of an older force. Commands for another run (a previous plant process) are refused.
 // With the pair's key (authenticate()), a command whose trailer does not verify is counted by
@@ -137,9 +138,11 @@ class HoldLag {
   static constexpr int kMaxLag = 32;
   static constexpr int kWindow = 256;
 
-  explicit HoldLag(std::int64_t period_ns) noexcept
+  /// fixed > 0: the lag is that many periods whatever the round trips (clamped to kMaxLag).
+  explicit HoldLag(std::int64_t period_ns, int fixed = 0) noexcept
       : period_ns_(period_ns), longest_(static_cast<int>(std::clamp<std::int64_t>(
-                                   1'000'000'000 / std::max<std::int64_t>(period_ns, 1), 1, kMaxLag))) {}
+                                   1'000'000'000 / std::max<std::int64_t>(period_ns, 1), 1, kMaxLag))),
+        fixed_(std::clamp(fixed, 0, kMaxLag)) {}
 
   /// A command's round trip, from its state's sending to its receipt [ns].
   void record(std::int64_t round_trip_ns) noexcept {
@@ -151,6 +154,7 @@ class HoldLag {
     next_ = (next_ + 1) % kWindow;
   }
   int lag() const noexcept {
+    if (fixed_ > 0) return fixed_;
     if (recorded_ == 0) return 1;
     const int needed = (recorded_ * 3 + 3) / 4;  // ceil(0.75 n)
     int cumulative = 0, bin = 0;
@@ -160,7 +164,7 @@ class HoldLag {
 
  private:
   std::int64_t period_ns_;
-  int longest_;
+  int longest_, fixed_;
   int recorded_ = 0;
   std::size_t next_ = 0;
   std::array<std::uint8_t, kWindow> window_{};
@@ -176,6 +180,10 @@ struct PlantNodeOptions {
   /// The plant's actuators driven by the command's control (plant.actuators): a command must carry
   /// that many, and the command held is the force followed by them. 0: the force alone.
   int actuators = 0;
+  /// Real time: the answer to state k acts from period k + hold_lag, fixed (a loop whose delay does
+  /// not vary, as a discrete-time design assumes); later answers are counted late. 0: one more than
+  /// the 75th percentile of the measured round trips in periods (HoldLag).
+  int hold_lag = 0;
   std::size_t periods = 1 << 16;  ///< periods to keep latency figures for
   std::int64_t run_id = 0;     ///< 0: chosen at random
 };
@@ -201,13 +209,16 @@ class PlantNode {
       : lcm_(lcm), states_(states), o_(o), codec_(checked(dimension)),
         scheduler_(static_cast<std::int64_t>(std::llround(1e9 / o.rate_hz)), monotonic_ns(), o.periods),
         watchdog_(static_cast<std::int64_t>(o.watchdog_ms) * 1000000, monotonic_ns()),
-        hold_lag_(scheduler_.period_ns()), round_trip_us_(o.periods), compute_ns_(o.periods),
+        hold_lag_(scheduler_.period_ns(), o.hold_lag), round_trip_us_(o.periods), compute_ns_(o.periods),
         answered_sequences_(o.periods), deadline_work_us_(o.periods), hold_lag_periods_(o.periods),
         applied_states_(o.periods) {
     run_id_ = o.run_id != 0 ? o.run_id : random_run_id();
     if (o.actuators < 0 || dimension + o.actuators > kMaxDimension)
       throw std::invalid_argument("PlantNode: " + std::to_string(o.actuators) + " actuators for dimension " +
                                   std::to_string(dimension) + ": the held command (force, then control) has at most 32 entries");
+    if (o.hold_lag < 0 || o.hold_lag > HoldLag::kMaxLag)
+      throw std::invalid_argument("PlantNode: a hold lag of " + std::to_string(o.hold_lag) + " periods: 0 (measured) to " +
+                                  std::to_string(HoldLag::kMaxLag));
     const int held = dimension + o.actuators;
     hold_ = Vector::Zero(held);
     incoming_force_ = Vector::Zero(dimension);
