@@ -221,14 +221,16 @@ def phases(b, models):
     out = ["", "### The general case's solve taken apart", "",
            "Each kernel of the refactoring path alone (`phase/*`, the law's own kernels on the benchmark "
            "states' terms, each input copied in first): Cholesky of A (N^3/3 flops), B^T = L^-1 D^T "
-           "(N^2 P), the Gram matrix B B^T (2 N P^2, the full product), its Cholesky (P^3/3) and the "
+           "(N^2 P), the Gram matrix B B^T (N P (P + 1), its lower triangle), its Cholesky (P^3/3) and the "
            "inverse factor the condition bound needs (P^3/3); with P = 1 the law takes a scalar path "
            "instead of the last two (shown as -). `rest` is the general row's solve (row less "
            "`model_terms`) less the kernels it runs: the right-hand sides and their triangular solves, the "
            "products, the checks and the residual. Beside it the KKT baseline's LU alone as a user writes "
            "it (`kkt_lu`: a `PartialPivLU<MatrixXd>` constructed on the assembled matrix, so its 3 "
            "allocations, the matrix's copy and Eigen's norm pass included; 2 (N+P)^3/3 flops) and the KKT "
-           "row's solve (row less `model_terms`).", "",
+           "row's solve (row less `model_terms`). The flop counts are those of dense D; above 8 "
+           "coordinates the law's solve of B^T and its Gram matrix run only where D's rows can be nonzero "
+           "(a chain's row touches two coordinates), so there the rates below are dense-equivalent.", "",
            "| system | " + " | ".join(kernels) + " | rest | general solve | kkt_lu | KKT solve |",
            "|---|" + "---|" * (len(kernels) + 4)]
     for m in phased:
@@ -263,7 +265,7 @@ def kernel_flops(k, n, p):
     """Flops of one kernel of the general case's solve, as the table above counts them; `rest`: the
     right-hand sides and products (a = A^-1 (Q - f), D a, G^-1 on two right sides, B^T w, L y, L^-T,
     the residual D q''): about 5 N^2 + 8 N P + 4 P^2."""
-    return {"mass_cholesky": n ** 3 / 3, "constraint_solve": n * n * p, "gram": 2 * n * p * p,
+    return {"mass_cholesky": n ** 3 / 3, "constraint_solve": n * n * p, "gram": n * p * (p + 1),
             "gram_cholesky": p ** 3 / 3, "gram_inverse": p ** 3 / 3, "rest": 5 * n * n + 8 * n * p + 4 * p * p,
             "kkt_lu": 2 * (n + p) ** 3 / 3}[k]
 
@@ -273,7 +275,7 @@ def flop_rates(t, phased, kernels):
     that holds the most time (the one at fault) with its rate."""
     out = ["", "Flop rates of the same kernels (GFlop/s: the kernel's flop count over its time; `rest` from "
            "its count 5 N^2 + 8 N P + 4 P^2 over its time), beside the KKT LU's. The general case needs about "
-           "half the KKT's flops (N^3/3 + N^2 P + 2 N P^2 + 2 P^3/3 against 2 (N + P)^3/3), so it is 2x faster "
+           "half the KKT's flops (N^3/3 + N^2 P + N P^2 + 2 P^3/3 against 2 (N + P)^3/3), so it is 2x faster "
            "only where its kernels run at the LU's rate and the model's terms are small beside both.", "",
            "| system | " + " | ".join(kernels) + " | rest | kkt_lu | general / KKT (row) | kernel at fault |",
            "|---|" + "---|" * (len(kernels) + 4)]

@@ -186,16 +186,22 @@ void bench_plain_fixed(benchmark::State& state) {
     TermsOf<M> t;
     evaluate_model(model, s.q[k], s.qd[k], s.t[k], t);
     // The law's kernels (small_dense) with none of its checks: no finiteness tests, no condition
-    // bound (so no L_G^-1: the Gram matrix is applied by two triangular solves), no residual.
+    // bound (so no L_G^-1: the Gram matrix is applied by two triangular solves), no residual. As
+    // the law does, B^T's solve and the Gram matrix skip what D's rows leave exactly zero.
     Eigen::Matrix<double, N, N> l = t.mass_matrix;
-    small_dense::cholesky_in_place(l);
+    Eigen::Matrix<double, N, 1> reciprocal;  // 1 / L_kk
+    small_dense::cholesky_in_place(l, reciprocal.data());
     Eigen::Matrix<double, N, 1> a = t.applied_force - t.nonlinear_force;
-    small_dense::solve_lower_in_place(l, a);
-    small_dense::solve_lower_transposed_in_place(l, a);
+    small_dense::solve_lower_in_place(l, reciprocal.data(), a);
+    small_dense::solve_lower_transposed_in_place(l, reciprocal.data(), a);
     Eigen::Matrix<double, N, P> bt = t.constraint_matrix.transpose();
-    small_dense::solve_lower_in_place(l, bt);  // B^T = L^-1 D^T
+    int first[P], end[P];  // where D's rows can be nonzero, and B^T's columns below them
+    small_dense::column_supports(bt, first, end);
+    for (int i = 0; i < P; ++i) end[i] = end[i] == 0 ? 0 : N;
+    const bool supports = N > 8;  // as the law: above 8 coordinates
+    small_dense::solve_lower_in_place(l, reciprocal.data(), bt, supports ? first : nullptr);  // B^T = L^-1 D^T
     Eigen::Matrix<double, P, P> gram;
-    gram.noalias() = bt.transpose().lazyProduct(bt);
+    small_dense::gram(bt, gram, supports ? first : nullptr, supports ? end : nullptr);
     small_dense::cholesky_in_place(gram);
     Eigen::Matrix<double, P, 2> w;
     w.col(0).noalias() = -(t.constraint_matrix.lazyProduct(a));
@@ -235,7 +241,9 @@ void bench_phase(benchmark::State& state, Phase phase) {
   constexpr int N = M::kDof, P = M::kConstraints;
   struct Inputs {
     Eigen::Matrix<double, N, N> a, l;                // A and its factor
+    Eigen::Matrix<double, N, 1> reciprocal;          // 1 / L_kk
     Eigen::Matrix<double, N, P> dt, bt;              // D^T and B^T = L^-1 D^T
+    int first[P], end[P];  // B^T's columns' supports (used above 8 coordinates, as the law does)
     Eigen::Matrix<double, P, P> gram, gram_l;        // B B^T and its factor
     Eigen::MatrixXd kkt;                             // [A D^T; D 0]
   };
@@ -248,10 +256,12 @@ void bench_phase(benchmark::State& state, Phase phase) {
       Inputs& in = v[k];
       in.a = m.A;
       in.l = m.A;
-      small_dense::cholesky_in_place(in.l);
+      small_dense::cholesky_in_place(in.l, in.reciprocal.data());
       in.dt = m.D.transpose();
+      small_dense::column_supports(in.dt, in.first, in.end);
+      for (int i = 0; i < P; ++i) in.end[i] = in.end[i] == 0 ? 0 : N;
       in.bt = in.dt;
-      small_dense::solve_lower_in_place(in.l, in.bt);
+      small_dense::solve_lower_in_place(in.l, in.reciprocal.data(), in.bt);
       in.gram.noalias() = in.bt.transpose().lazyProduct(in.bt);
       in.gram_l = in.gram;
       small_dense::cholesky_in_place(in.gram_l);
@@ -275,11 +285,11 @@ void bench_phase(benchmark::State& state, Phase phase) {
         break;
       case Phase::kConstraintSolve:
         bt = in.dt;
-        small_dense::solve_lower_in_place(in.l, bt);
+        small_dense::solve_lower_in_place(in.l, in.reciprocal.data(), bt, N > 8 ? in.first : nullptr);
         benchmark::DoNotOptimize(bt.data());
         break;
       case Phase::kGram:
-        g.noalias() = in.bt.transpose().lazyProduct(in.bt);
+        small_dense::gram(in.bt, g, N > 8 ? in.first : nullptr, N > 8 ? in.end : nullptr);
         benchmark::DoNotOptimize(g.data());
         break;
       case Phase::kGramCholesky:

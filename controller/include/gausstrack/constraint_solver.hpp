@@ -211,8 +211,8 @@ class ConstraintSolver {
   /// right side (P): the part of Q' due to a term added to g. Zero if the last solve failed.
   VectorN force_for_rhs(const VectorP& rhs) const noexcept {
     if (!ready_) return VectorN::Zero();
-    VectorN y, force;
-    apply_pseudo_inverse(rhs, y, force);
+    VectorN force;
+    apply_pseudo_inverse(rhs, force, nullptr);
     return force;
   }
 
@@ -232,17 +232,19 @@ class ConstraintSolver {
     for (int i = 0; i < N; ++i) u(i) = Q(i) - f(i);
     solve_l_in_place(u);
     Eigen::Matrix<Scalar, P, 2> rhs;
-    for (int i = 0; i < P; ++i) {
-      rhs(i, 0) = -small_dense::dot(bt_.data() + i * N, u.data(), N);  // -(B u)_i = -(D a)_i
+    for (int i = 0; i < P; ++i) {  // -(B u)_i = -(D a)_i over B^T's column's support
+      const int from = kSupports ? bt_first_[i] : 0, to = kSupports ? bt_end_[i] : N;
+      rhs(i, 0) = -small_dense::dot(bt_.data() + i * N + from, u.data() + from, to - from);
       rhs(i, 1) = g(i);
     }
-    Eigen::Matrix<Scalar, N, 2> y, force;
-    apply_pseudo_inverse(rhs, y, force);
+    Eigen::Matrix<Scalar, N, 2> force;
+    VectorN y;  // B^+ (-D a) + B^+ g
+    apply_pseudo_inverse(rhs, force, &y);
 
     Eigen::Matrix<Scalar, N, 2> w;  // [u, u + y], then L^-T of both: [a, q'']
     for (int i = 0; i < N; ++i) {
       w(i, 0) = u(i);
-      w(i, 1) = u(i) + (y(i, 0) + y(i, 1));
+      w(i, 1) = u(i) + y(i);
     }
     for (int i = 0; i < N; ++i) {
       out.force_from_impressed(i) = force(i, 0);
@@ -276,26 +278,31 @@ class ConstraintSolver {
     using small_dense::all_finite;
     const bool same_mass = factored_ && options_.reuse_factorization && mass_equals(A);
     const bool same_factors = same_mass && small_dense::all_equal(D.data(), d_key_.data(), P * N);
+    // A new D is read once: into D^T (kept) with its squared norm, which is finite only when every
+    // entry is (an overflowed square sends the test to the entries themselves). The kept
+    // factorization is dropped first, since D^T is part of it.
+    if (!same_factors) {
+      factored_ = false;
+      read_constraint_matrix(D);
+    }
     std::uint32_t bad = 0;
     if (!same_mass && !mass_finite(A)) bad |= input::kMassMatrix;
     if (!all_finite(f.data(), N)) bad |= input::kNonlinearForce;
     if (!all_finite(Q.data(), N)) bad |= input::kAppliedForce;
-    if (!same_factors && !all_finite(D.data(), P * N)) bad |= input::kConstraintMatrix;
+    if (!same_factors && !std::isfinite(d_norm2_) && !all_finite(D.data(), P * N)) bad |= input::kConstraintMatrix;
     if (!all_finite(g.data(), P)) bad |= input::kConstraintRhs;
     if (bad != 0) {
       out.diagnostics.non_finite_inputs = bad;
       return fail(out, Status::kNonFiniteInput);
     }
     if (same_factors) return Status::kOk;
-    factored_ = false;
     if (!same_mass && !factor_mass(A)) return fail(out, Status::kMassMatrixNotPositiveDefinite);
-    d_key_ = D;
-    d_norm2_ = small_dense::squared_norm(D.data(), P * N);
-    set_bt(D);  // B^T = L^-1 D^T
+    if (options_.reuse_factorization) d_key_ = D;  // only compared when kept
+    set_bt();  // B^T = L^-1 D^T
     factor_diagnostics_ = SolveDiagnostics<Scalar>{};
     // B or its factors overflowed (entries near the range limit): nothing below could be
     // trusted, and a factorization of non-finite numbers is not kept.
-    if (!all_finite(bt_.data(), N * P) || !factorize(factor_diagnostics_)) return fail(out, Status::kNonFiniteResult);
+    if (!factorize(factor_diagnostics_)) return fail(out, Status::kNonFiniteResult);
     factored_ = true;
     return Status::kOk;
   }
@@ -312,7 +319,9 @@ class ConstraintSolver {
     const Scalar scale2 = squared_norm(g.data(), P) + d_norm2_ * squared_norm(out.acceleration.data(), N);
     bool met;
     if (std::isfinite(residual2) && std::isfinite(scale2)) {
-      diag.residual_norm = std::sqrt(residual2);
+      // One row: the norm is the residual's magnitude (no square root).
+      if constexpr (P == 1) diag.residual_norm = std::abs(residual(0));
+      else diag.residual_norm = std::sqrt(residual2);
       met = !(residual2 > options_.residual_tolerance * options_.residual_tolerance * scale2);
     } else {
       // Squares beyond the range (norms from about 1e154): the same test on norms taken without
@@ -362,15 +371,27 @@ class ConstraintSolver {
       return small_dense::cholesky_in_place(mass_l_, mass_reciprocal_.data());
     }
   }
-  void set_bt(const MatrixPN& D) noexcept {  // B^T = L^-1 D^T (and D^T, dense)
+  // D^T into dt_, ||D||_F^2 into d_norm2_, and where each row of D can be nonzero.
+  void read_constraint_matrix(const MatrixPN& D) noexcept {
     for (int i = 0; i < P; ++i)
-      for (int j = 0; j < N; ++j) bt_(j, i) = D(i, j);
-    if constexpr (kMass != MassMatrix::kDiagonal) dt_ = bt_;
+      for (int j = 0; j < N; ++j) dt_(j, i) = D(i, j);
+    d_norm2_ = small_dense::squared_norm(dt_.data(), N * P);
+    if constexpr (kSupports) small_dense::column_supports(dt_, d_first_, d_end_);
+  }
+  // B^T = L^-1 D^T. Its columns' supports: D's rows' with a diagonal L; from the same first row
+  // to the last with a dense one (the substitution fills in below).
+  void set_bt() noexcept {
+    if constexpr (kSupports)
+      for (int i = 0; i < P; ++i) {
+        bt_first_[i] = d_first_[i];
+        bt_end_[i] = kMass == MassMatrix::kDiagonal || d_end_[i] == 0 ? d_end_[i] : N;
+      }
     if constexpr (kMass == MassMatrix::kDiagonal) {
       for (int i = 0; i < P; ++i)
-        for (int j = 0; j < N; ++j) bt_(j, i) *= inverse_sqrt_mass_(j);
+        for (int j = 0; j < N; ++j) bt_(j, i) = dt_(j, i) * inverse_sqrt_mass_(j);
     } else {
-      small_dense::solve_lower_in_place(mass_l_, mass_reciprocal_.data(), bt_);
+      bt_ = dt_;
+      small_dense::solve_lower_in_place(mass_l_, mass_reciprocal_.data(), bt_, kSupports ? bt_first_ : nullptr);
     }
   }
   void solve_l_in_place(VectorN& x) const noexcept {  // x = L^-1 x
@@ -402,7 +423,7 @@ class ConstraintSolver {
   // |g| + |D| |q''| without squaring (for |D|^2 |q''|^2 beyond the range; rare, so not cached).
   Scalar unsquared_scale(const VectorP& g, const VectorN& acceleration) const noexcept {
     return small_dense::scaled_norm(g.data(), P) +
-           small_dense::scaled_norm(d_key_.data(), P * N) * small_dense::scaled_norm(acceleration.data(), N);
+           small_dense::scaled_norm(dt_.data(), P * N) * small_dense::scaled_norm(acceleration.data(), N);
   }
 
   Status fail(Solution& out, Status status) noexcept {
@@ -424,27 +445,32 @@ class ConstraintSolver {
   // Factor B (held as bt_) with the selected strategy; fills the rank diagnostics. Returns
   // false when the factors came out non-finite (B finite, but its norms overflowed).
   bool factorize(SolveDiagnostics<Scalar>& diag) noexcept {
+    // A non-finite B (L^-1 D^T overflowed) makes B B^T non-finite, which the normal equations
+    // refuse; the rank-revealing kernels are not given it.
+    const auto rank_revealing = [&](bool (ConstraintSolver::*kernel)(SolveDiagnostics<Scalar>&)) {
+      return small_dense::all_finite(bt_.data(), N * P) && (this->*kernel)(diag);
+    };
     // With a floor on the singular values, every strategy first asks whether B certainly has
     // none below it; if that cannot be shown, the SVD decides exactly which directions to keep
     // (and sets kNearSingular when it drops one the relative tolerance would have kept).
     if (options_.min_singular_value > Scalar(0) && options_.strategy != InverseStrategy::kSvd &&
         !certainly_above_floor()) {
       diag.warnings |= warning::kFellBackToSvd;
-      return factorize_svd(diag);
+      return rank_revealing(&ConstraintSolver::factorize_svd);
     }
     switch (options_.strategy) {
       case InverseStrategy::kCholeskyWithFallback:
         if (factorize_normal_equations(Scalar(0), diag)) return true;
         diag.warnings |= warning::kFellBackToSvd;
-        return factorize_svd(diag);
+        return rank_revealing(&ConstraintSolver::factorize_svd);
       case InverseStrategy::kDampedLeastSquares:
         if (factorize_normal_equations(options_.damping * options_.damping, diag)) return true;
         diag.warnings |= warning::kFellBackToSvd;
-        return factorize_svd(diag);
+        return rank_revealing(&ConstraintSolver::factorize_svd);
       case InverseStrategy::kSvd:
-        return factorize_svd(diag);
+        return rank_revealing(&ConstraintSolver::factorize_svd);
       case InverseStrategy::kCompleteOrthogonal:
-        return factorize_cod(diag);
+        return rank_revealing(&ConstraintSolver::factorize_cod);
     }
     return false;
   }
@@ -464,10 +490,8 @@ class ConstraintSolver {
   // Cholesky factorization fails.
   bool factor_gram(Scalar lambda2, Scalar& norm1, Scalar& inverse_norm2) noexcept {
     MatrixPP gram;  // B B^T: dot products of B^T's columns
-    for (int j = 0; j < P; ++j)
-      for (int i = j; i < P; ++i) {
-        gram(i, j) = gram(j, i) = small_dense::dot(bt_.data() + i * N, bt_.data() + j * N, N);
-      }
+    if constexpr (kSupports) small_dense::gram(bt_, gram, bt_first_, bt_end_);
+    else small_dense::gram(bt_, gram);
     for (int i = 0; i < P; ++i) gram(i, i) += lambda2;
     if (!small_dense::all_finite(gram.data(), P * P)) return false;
     norm1 = Scalar(0);  // ||G||_1, the largest column sum of |G|
@@ -557,15 +581,16 @@ class ConstraintSolver {
     diag.condition_estimate = rank_ > 0 ? hi / lo : Scalar(0);
   }
 
-  // y = B^+ r and the constraint force L y for K right sides, with the factorization `factorize`
-  // chose. On the normal equations B^+ = B^T G^-1, so with w = G^-1 r (the constraints'
-  // multipliers) y = B^T w and L y = L L^-1 D^T w = D^T w: a product with D (N P) rather than with
-  // a dense L (N^2); a diagonal L is N products.
+  // The constraint force L y, y = B^+ r, for K right sides, with the factorization `factorize`
+  // chose, and when asked the sum of the K columns of y (q'' needs only that). On the normal
+  // equations B^+ = B^T G^-1, so with w = G^-1 r (the constraints' multipliers) y = B^T w and
+  // L y = L L^-1 D^T w = D^T w: a product with D (N P) rather than with a dense L (N^2); a diagonal
+  // L is N products. The sum of y's columns is B^T applied to the sum of w's.
   template <int K>
-  void apply_pseudo_inverse(const Eigen::Matrix<Scalar, P, K>& r, Eigen::Matrix<Scalar, N, K>& y,
-                            Eigen::Matrix<Scalar, N, K>& force) const noexcept {
+  void apply_pseudo_inverse(const Eigen::Matrix<Scalar, P, K>& r, Eigen::Matrix<Scalar, N, K>& force,
+                            VectorN* y_sum) const noexcept {
     if (used_ != InverseStrategy::kCholeskyWithFallback && used_ != InverseStrategy::kDampedLeastSquares) {
-      apply_rank_revealing(r, y, force);
+      apply_rank_revealing(r, force, y_sum);
       return;
     }
     Eigen::Matrix<Scalar, P, K> w = r;  // w = G^-1 r = L^-T L^-1 r
@@ -575,25 +600,60 @@ class ConstraintSolver {
       small_dense::multiply_lower_in_place(gram_l_inv_, w);
       small_dense::multiply_lower_transposed_in_place(gram_l_inv_, w);
     }
-    // y = B^T w and force = D^T w, both down their N x P factors' columns.
-    for (int k = 0; k < K; ++k) {
-      for (int i = 0; i < N; ++i) y(i, k) = bt_(i, 0) * w(0, k);
-      for (int j = 1; j < P; ++j)
-        for (int i = 0; i < N; ++i) y(i, k) += bt_(i, j) * w(j, k);
-      if constexpr (kMass == MassMatrix::kDiagonal) {
-        for (int i = 0; i < N; ++i) force(i, k) = sqrt_mass_(i) * y(i, k);
-      } else {
-        for (int i = 0; i < N; ++i) force(i, k) = dt_(i, 0) * w(0, k);
-        for (int j = 1; j < P; ++j)
-          for (int i = 0; i < N; ++i) force(i, k) += dt_(i, j) * w(j, k);
+    // Products down the N x P factors' columns, into locals (the outputs might alias the factors,
+    // as far as the compiler knows).
+    Scalar column[N];
+    if constexpr (kMass == MassMatrix::kDiagonal) {
+      // force = sqrt(A) B^T w column by column; y's sum from the columns before scaling.
+      Scalar sum[N] = {};
+      for (int k = 0; k < K; ++k) {
+        times(bt_, bt_first_, bt_end_, w.data() + k * P, column);
+        for (int i = 0; i < N; ++i) {
+          sum[i] += column[i];
+          force(i, k) = sqrt_mass_(i) * column[i];
+        }
       }
+      if (y_sum != nullptr)
+        for (int i = 0; i < N; ++i) (*y_sum)(i) = sum[i];
+    } else {
+      for (int k = 0; k < K; ++k) {
+        times(dt_, d_first_, d_end_, w.data() + k * P, column);
+        for (int i = 0; i < N; ++i) force(i, k) = column[i];
+      }
+      if (y_sum != nullptr) {
+        Scalar w_sum[P];
+        for (int j = 0; j < P; ++j) {
+          w_sum[j] = w(j, 0);
+          for (int k = 1; k < K; ++k) w_sum[j] += w(j, k);
+        }
+        times(bt_, bt_first_, bt_end_, w_sum, column);
+        for (int i = 0; i < N; ++i) (*y_sum)(i) = column[i];
+      }
+    }
+  }
+
+  // out = M x for an N x P factor M, down its columns (their supports [first[j], end[j]) above
+  // kDenseUpTo coordinates).
+  static void times(const MatrixNP& m, const int* first, const int* end, const Scalar* x, Scalar* out) noexcept {
+    if constexpr (kSupports) {
+      for (int i = 0; i < N; ++i) out[i] = Scalar(0);
+      for (int j = 0; j < P; ++j) {
+        const Scalar xj = x[j];
+        const Scalar* mj = m.data() + j * N;
+        for (int i = first[j]; i < end[j]; ++i) out[i] += mj[i] * xj;
+      }
+    } else {
+      for (int i = 0; i < N; ++i) out[i] = m(i, 0) * x[0];
+      for (int j = 1; j < P; ++j)
+        for (int i = 0; i < N; ++i) out[i] += m(i, j) * x[j];
     }
   }
 
   // apply_pseudo_inverse with the SVD or the complete orthogonal decomposition: force = L y.
   template <int K>
-  void apply_rank_revealing(const Eigen::Matrix<Scalar, P, K>& r, Eigen::Matrix<Scalar, N, K>& y,
-                            Eigen::Matrix<Scalar, N, K>& force) const noexcept {
+  void apply_rank_revealing(const Eigen::Matrix<Scalar, P, K>& r, Eigen::Matrix<Scalar, N, K>& force,
+                            VectorN* y_sum) const noexcept {
+    Eigen::Matrix<Scalar, N, K> y;
     switch (used_) {
       case InverseStrategy::kCholeskyWithFallback:
       case InverseStrategy::kDampedLeastSquares:
@@ -624,6 +684,7 @@ class ConstraintSolver {
         break;
       }
     }
+    if (y_sum != nullptr) *y_sum = y.rowwise().sum();
     force = y;
     apply_l_in_place(force);
   }
@@ -634,7 +695,7 @@ class ConstraintSolver {
   MatrixNN mass_key_ = MatrixNN::Zero();   // A (dense)
   VectorN mass_diagonal_ = VectorN::Zero();  // A's diagonal (diagonal)
   VectorN sqrt_mass_ = VectorN::Zero(), inverse_sqrt_mass_ = VectorN::Zero();
-  MatrixPN d_key_ = MatrixPN::Zero();       // D
+  MatrixPN d_key_ = MatrixPN::Zero();       // D (kept only with reuse_factorization)
   Scalar d_norm2_ = Scalar(0);              // ||D||_F^2
   Scalar inverse_gram_ = Scalar(0);         // 1 / (B B^T + lambda^2) when P = 1
   SolveDiagnostics<Scalar> factor_diagnostics_;  // what factorize reported
@@ -642,7 +703,14 @@ class ConstraintSolver {
   MatrixNN mass_l_ = MatrixNN::Identity();       // A = L L^T, lower triangle (dense)
   VectorN mass_reciprocal_ = VectorN::Ones();     // 1 / L_kk (dense)
   MatrixNP bt_ = MatrixNP::Zero();               // B^T = L^-1 D^T
-  MatrixNP dt_ = MatrixNP::Zero();               // D^T (dense)
+  MatrixNP dt_ = MatrixNP::Zero();               // D^T
+  // Where the columns of D^T and of B^T can be nonzero (small_dense::column_supports): above
+  // kDenseUpTo coordinates the products, B^T's solve and the Gram matrix skip the rest, which a
+  // constraint row touching a few coordinates leaves mostly zero; up to it the loops of fixed
+  // length measure faster (as for the jets, jet.hpp).
+  static constexpr int kDenseUpTo = 8;
+  static constexpr bool kSupports = N > kDenseUpTo;
+  int d_first_[P] = {}, d_end_[P] = {}, bt_first_[P] = {}, bt_end_[P] = {};
   MatrixPP gram_l_inv_ = MatrixPP::Identity();   // L^-1 for B B^T + lambda^2 I = L L^T
   MatrixNP svd_u_ = MatrixNP::Zero();            // B^T = U S V^T (kSvd)
   MatrixPP svd_v_ = MatrixPP::Identity();

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 
 namespace gausstrack::small_dense {
@@ -168,27 +169,67 @@ void update_from_even(int first, int end, Update update) noexcept {
   for (; i < end; ++i) update(i);
 }
 
+/// Where each column of the N x K x can be nonzero: rows [first[c], end[c]) (first even, so that
+/// the kernels below keep their pairs of rows; first = end = 0 for a zero column). Read as is,
+/// a NaN counts as nonzero. A constraint row touches only the coordinates it depends on (a chain's
+/// link two of them), and the kernels taking supports skip what is exactly zero, with the same
+/// answer (up to the sign of a zero): every term they leave out is an exact zero.
+template <typename Scalar, int N, int K>
+void column_supports(const Eigen::Matrix<Scalar, N, K>& x, int* first, int* end) noexcept {
+  for (int c = 0; c < K; ++c) {
+    const Scalar* xc = x.data() + c * N;
+    int lo = N, hi = 0;
+    for (int i = 0; i < N; ++i) {
+      const bool nonzero = !(xc[i] == Scalar(0));
+      lo = nonzero && i < lo ? i : lo;
+      hi = nonzero ? i + 1 : hi;
+    }
+    first[c] = hi == 0 ? 0 : lo & ~1;
+    end[c] = hi;
+  }
+}
+
 /// x = L^-1 x for every column of x (forward substitution, column-oriented), reciprocal[k] =
-/// 1 / L_kk.
+/// 1 / L_kk. With `first` (see column_supports), column c is known to be zero above row
+/// first[c], and so is its answer: its steps start there.
 template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
 void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* reciprocal,
-                          Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x) noexcept {
+                          Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x,
+                          const int* first = nullptr) noexcept {
   static_assert(N == 1 || K == 1 || !(Options & Eigen::RowMajor), "column-major right sides");
   const Scalar* a = l.data();
-  for (int k = 0; k < N; ++k) {  // step k for every column: independent chains side by side
-    const Scalar* ck = a + k * N;
-    for (int c = 0; c < K; ++c) {
-      Scalar* xc = x.data() + c * N;
-      const Scalar v = xc[k] * reciprocal[k];
-      xc[k] = v;
-      // With three or more columns side by side, the other columns' work hides the stall, and the
-      // plain loop measures faster (B^T = L^-1 D^T at 8 x 4: 50 ns against 88).
-      if constexpr (K <= 2) {
+  if constexpr (K <= 2) {
+    for (int k = 0; k < N; ++k) {  // step k for every column: independent chains side by side
+      const Scalar* ck = a + k * N;
+      for (int c = 0; c < K; ++c) {
+        if (first != nullptr && k < first[c]) continue;
+        Scalar* xc = x.data() + c * N;
+        const Scalar v = xc[k] * reciprocal[k];
+        xc[k] = v;
         update_from_even(k + 1, N, [&](int i) { xc[i] -= ck[i] * v; });
-      } else {
-        for (int i = k + 1; i < N; ++i) xc[i] -= ck[i] * v;
       }
     }
+  } else {
+    // Many columns (B^T = L^-1 D^T): two steps at a time, the 2 x 2 diagonal block and then one
+    // rank-2 update of the rows below, so that each entry is loaded and stored once per two steps
+    // (one step at a time, the stores bound the loop). The other columns' work hides the
+    // store-forwarding stall that update_from_even avoids for one or two columns.
+    int k = 0;
+    for (; k + 1 < N; k += 2) {
+      const Scalar* c0 = a + k * N;
+      const Scalar* c1 = c0 + N;
+      for (int c = 0; c < K; ++c) {
+        if (first != nullptr && k < first[c]) continue;  // first[c] is even
+        Scalar* xc = x.data() + c * N;
+        const Scalar v0 = xc[k] * reciprocal[k];
+        const Scalar v1 = (xc[k + 1] - c0[k + 1] * v0) * reciprocal[k + 1];
+        xc[k] = v0;
+        xc[k + 1] = v1;
+        for (int i = k + 2; i < N; ++i) xc[i] -= c0[i] * v0 + c1[i] * v1;
+      }
+    }
+    if (k < N)  // N odd: the last row
+      for (int c = 0; c < K; ++c) x.data()[c * N + k] *= reciprocal[k];
   }
 }
 
@@ -270,6 +311,54 @@ void multiply_lower_transposed_in_place(const Eigen::Matrix<Scalar, N, N>& l,
       xc[k] = s;
     }
   }
+}
+
+/// g = x^T x (both triangles) for the N x K x. Its lower triangle in 2 x 2 blocks of columns:
+/// four dot products side by side, each in two partial sums (even and odd rows), so that each
+/// loaded pair of entries serves two products and the sums vectorize without reordering. With
+/// supports (column_supports), a block's sums run only over the rows where both of its pairs of
+/// columns can be nonzero.
+template <typename Scalar, int N, int K>
+void gram(const Eigen::Matrix<Scalar, N, K>& x, Eigen::Matrix<Scalar, K, K>& g, const int* first = nullptr,
+          const int* end = nullptr) noexcept {
+  const Scalar* d = x.data();
+  const auto block = [&](int i, int j, int rows, int cols) {  // g(i.., j..) for rows, cols <= 2
+    const int i1 = i + rows - 1, j1 = j + cols - 1;
+    int from = 0, to = N;
+    if (first != nullptr) {
+      from = std::max(std::min(first[i], first[i1]), std::min(first[j], first[j1]));
+      to = std::min(std::max(end[i], end[i1]), std::max(end[j], end[j1]));
+    }
+    const Scalar* xi0 = d + i * N;
+    const Scalar* xi1 = d + i1 * N;
+    const Scalar* xj0 = d + j * N;
+    const Scalar* xj1 = d + j1 * N;
+    Scalar s00[2] = {}, s01[2] = {}, s10[2] = {}, s11[2] = {};
+    int k = from;  // even
+    for (; k + 1 < to; k += 2)
+      for (int h = 0; h < 2; ++h) {
+        s00[h] += xi0[k + h] * xj0[k + h];
+        s01[h] += xi0[k + h] * xj1[k + h];
+        s10[h] += xi1[k + h] * xj0[k + h];
+        s11[h] += xi1[k + h] * xj1[k + h];
+      }
+    if (k < to) {
+      s00[0] += xi0[k] * xj0[k];
+      s01[0] += xi0[k] * xj1[k];
+      s10[0] += xi1[k] * xj0[k];
+      s11[0] += xi1[k] * xj1[k];
+    }
+    g(i, j) = s00[0] + s00[1];
+    if (cols == 2) g(i, j + 1) = s01[0] + s01[1];
+    if (rows == 2) g(i + 1, j) = s10[0] + s10[1];
+    if (rows == 2 && cols == 2) g(i + 1, j + 1) = s11[0] + s11[1];
+  };
+  for (int j = 0; j < K; j += 2) {
+    const int cols = std::min(2, K - j);
+    for (int i = j; i < K; i += 2) block(i, j, std::min(2, K - i), cols);
+  }
+  for (int j = 1; j < K; ++j)
+    for (int i = 0; i < j; ++i) g(i, j) = g(j, i);
 }
 
 /// The lower triangle of `inverse` becomes L^-1 (its upper triangle zero); returns the sum of
