@@ -445,32 +445,27 @@ class ConstraintSolver {
   // Factor B (held as bt_) with the selected strategy; fills the rank diagnostics. Returns
   // false when the factors came out non-finite (B finite, but its norms overflowed).
   bool factorize(SolveDiagnostics<Scalar>& diag) noexcept {
-    // A non-finite B (L^-1 D^T overflowed) makes B B^T non-finite, which the normal equations
-    // refuse; the rank-revealing kernels are not given it.
-    const auto rank_revealing = [&](bool (ConstraintSolver::*kernel)(SolveDiagnostics<Scalar>&)) {
-      return small_dense::all_finite(bt_.data(), N * P) && (this->*kernel)(diag);
-    };
     // With a floor on the singular values, every strategy first asks whether B certainly has
     // none below it; if that cannot be shown, the SVD decides exactly which directions to keep
     // (and sets kNearSingular when it drops one the relative tolerance would have kept).
     if (options_.min_singular_value > Scalar(0) && options_.strategy != InverseStrategy::kSvd &&
         !certainly_above_floor()) {
       diag.warnings |= warning::kFellBackToSvd;
-      return rank_revealing(&ConstraintSolver::factorize_svd);
+      return factorize_svd(diag);
     }
     switch (options_.strategy) {
       case InverseStrategy::kCholeskyWithFallback:
         if (factorize_normal_equations(Scalar(0), diag)) return true;
         diag.warnings |= warning::kFellBackToSvd;
-        return rank_revealing(&ConstraintSolver::factorize_svd);
+        return factorize_svd(diag);
       case InverseStrategy::kDampedLeastSquares:
         if (factorize_normal_equations(options_.damping * options_.damping, diag)) return true;
         diag.warnings |= warning::kFellBackToSvd;
-        return rank_revealing(&ConstraintSolver::factorize_svd);
+        return factorize_svd(diag);
       case InverseStrategy::kSvd:
-        return rank_revealing(&ConstraintSolver::factorize_svd);
+        return factorize_svd(diag);
       case InverseStrategy::kCompleteOrthogonal:
-        return rank_revealing(&ConstraintSolver::factorize_cod);
+        return factorize_cod(diag);
     }
     return false;
   }
@@ -544,7 +539,10 @@ class ConstraintSolver {
   }
 
   // One-sided Jacobi SVD of B^T = U S V^T (N x P), so B = V S U^T and B^+ = U S^+ V^T.
+  // Both rank-revealing kernels refuse a non-finite B (L^-1 D^T overflowed). The normal equations
+  // need no test: a non-finite B makes B B^T non-finite, which they refuse.
   bool factorize_svd(SolveDiagnostics<Scalar>& diag) noexcept {
+    if (!small_dense::all_finite(bt_.data(), N * P)) return false;
     used_ = InverseStrategy::kSvd;
     svd_damping2_ = options_.strategy == InverseStrategy::kDampedLeastSquares ? options_.damping * options_.damping
                                                                                : Scalar(0);
@@ -563,6 +561,7 @@ class ConstraintSolver {
   }
 
   bool factorize_cod(SolveDiagnostics<Scalar>& diag) noexcept {
+    if (!small_dense::all_finite(bt_.data(), N * P)) return false;
     used_ = InverseStrategy::kCompleteOrthogonal;
     MatrixPN b;
     for (int i = 0; i < P; ++i)
