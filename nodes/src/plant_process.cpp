@@ -144,6 +144,7 @@ int run_plant(const PlantProcessOptions& o, const plant_sim::Scene& scene, plant
                                     std::span<const double> qd, std::span<double> u) {
     return node.exchange(period, t, q, qd, u);
   };
+  raise_loop_above_receiver(p, "gausstrack-plant");  // the node has subscribed
   RunResult result = run_scene(scene, run_options);
   // The run's warnings are those of the answers the plant held, period by period.
   result.summary.warnings = node.counts().warnings;

@@ -1,7 +1,11 @@
 // The node library without a network (LCM's memq:// provider): the codec at every dimension,
 // the controller node's compute, validation, failure contract and plant restarts, the plant
-// node's lock-step and real-time exchange, and the scheduler and watchdog alone.
+// node's lock-step and real-time exchange, and the scheduler and watchdog alone. One test opens a
+// udpm:// LCM (ttl=0, loopback only) to see the priority of its receive thread.
 #include <gtest/gtest.h>
+#include <sched.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 #include <lcm/lcm-cpp.hpp>
 
 #include <Eigen/Dense>
@@ -10,6 +14,8 @@
 #include <functional>
 #include <limits>
 #include <random>
+#include <filesystem>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -869,6 +875,55 @@ TEST(PeriodScheduler, DeadlinesAreAbsoluteAndLateWakeUpsAreMisses) {
   // A real wait wakes at or after its deadline.
   PeriodScheduler real(2'000'000, monotonic_ns(), 4);
   for (int k = 1; k <= 3; ++k) EXPECT_GE(real.wait_for(k), real.deadline(k));
+}
+
+// The real-time setup as the processes run it: apply_realtime, the LCM and its subscription (which
+// starts LCM's receive thread, inheriting the policy), then the loop raised one above it. Run in a
+// thread of its own so that the test process keeps the default scheduler.
+TEST(RealTime, TheLoopRunsOnePriorityAboveLcmsReceiveThread) {
+  struct Seen {
+    bool permitted = true, lcm_good = false;
+    int loop_policy = -1, loop_priority = -1;
+    std::vector<int> other_fifo_priorities;
+  } seen;
+  std::thread setup([&] {
+    ProcessOptions o;
+    o.rt_priority = 10;
+    sched_param probe{};
+    probe.sched_priority = o.rt_priority;
+    if (sched_setscheduler(0, SCHED_FIFO, &probe) != 0) {
+      seen.permitted = false;
+      return;
+    }
+    apply_realtime(o, "nodes_test");
+    lcm::LCM lcm{"udpm://239.255.76.67:7689?ttl=0"};
+    seen.lcm_good = lcm.good();
+    if (!seen.lcm_good) return;
+    struct Probe {
+      void on(const lcm::ReceiveBuffer*, const std::string&) {}
+    } handler;
+    lcm::Subscription* sub = lcm.subscribe("PRIORITY_PROBE", &Probe::on, &handler);
+    raise_loop_above_receiver(o, "nodes_test");
+    const pid_t self = static_cast<pid_t>(syscall(SYS_gettid));
+    sched_param p{};
+    seen.loop_policy = sched_getscheduler(0);
+    sched_getparam(0, &p);
+    seen.loop_priority = p.sched_priority;
+    for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+      const pid_t tid = static_cast<pid_t>(std::stol(task.path().filename().string()));
+      if (tid == self || sched_getscheduler(tid) != SCHED_FIFO) continue;
+      sched_getparam(tid, &p);
+      seen.other_fifo_priorities.push_back(p.sched_priority);
+    }
+    lcm.unsubscribe(sub);
+  });
+  setup.join();
+  if (!seen.permitted) GTEST_SKIP() << "SCHED_FIFO is not permitted here";
+  ASSERT_TRUE(seen.lcm_good);
+  EXPECT_EQ(seen.loop_policy, SCHED_FIFO);
+  EXPECT_EQ(seen.loop_priority, 11);
+  // Exactly one other real-time thread, LCM's receiver, one below the loop.
+  EXPECT_EQ(seen.other_fifo_priorities, std::vector<int>{10});
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <sys/mman.h>
 #include <time.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <csignal>
 #include <cstdint>
@@ -102,6 +103,22 @@ inline void apply_realtime(const ProcessOptions& o, const char* program) {
       std::fprintf(stderr, "%s: warning: SCHED_FIFO priority %d not permitted (%s); running under the default "
                            "scheduler\n", program, o.rt_priority, std::strerror(errno));
   }
+}
+
+/// Raises the calling thread (the loop) one SCHED_FIFO priority above the one apply_realtime gave
+/// the process. Called once the LCM subscriptions exist, and so LCM's receive thread (created by the
+/// first subscription, inheriting apply_realtime's priority) stays one below: under SCHED_FIFO
+/// threads of one priority do not preempt each other, so the loop's timed wake-up would otherwise
+/// wait whenever it lands while the receive thread is taking a message off the socket. With the
+/// loop above it, the wake-up preempts the receive thread, which only queues messages for the loop.
+/// Does nothing without --rt-priority; what is not permitted is a warning, as in apply_realtime.
+inline void raise_loop_above_receiver(const ProcessOptions& o, const char* program) {
+  if (o.rt_priority <= 0) return;
+  sched_param p{};
+  p.sched_priority = std::min(o.rt_priority + 1, sched_get_priority_max(SCHED_FIFO));
+  if (sched_setscheduler(0, SCHED_FIFO, &p) != 0)
+    std::fprintf(stderr, "%s: warning: SCHED_FIFO priority %d for the loop not permitted (%s)\n", program,
+                 p.sched_priority, std::strerror(errno));
 }
 
 }  // namespace gausstrack::nodes
