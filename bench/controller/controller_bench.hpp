@@ -197,7 +197,7 @@ void bench_plain_fixed(benchmark::State& state) {
     Eigen::Matrix<double, N, P> bt = t.constraint_matrix.transpose();
     int first[P], end[P];  // where D's rows can be nonzero, and B^T's columns below them
     small_dense::column_supports(bt, first, end);
-    for (int i = 0; i < P; ++i) end[i] = end[i] == 0 ? 0 : N;
+    small_dense::fill_in_below<N>(end, P);
     const bool supports = N > 8;  // as the law: above 8 coordinates
     small_dense::solve_lower_in_place(l, reciprocal.data(), bt, supports ? first : nullptr);  // B^T = L^-1 D^T
     Eigen::Matrix<double, P, P> gram;
@@ -259,7 +259,7 @@ void bench_phase(benchmark::State& state, Phase phase) {
       small_dense::cholesky_in_place(in.l, in.reciprocal.data());
       in.dt = m.D.transpose();
       small_dense::column_supports(in.dt, in.first, in.end);
-      for (int i = 0; i < P; ++i) in.end[i] = in.end[i] == 0 ? 0 : N;
+      small_dense::fill_in_below<N>(in.end, P);
       in.bt = in.dt;
       small_dense::solve_lower_in_place(in.l, in.reciprocal.data(), in.bt);
       in.gram.noalias() = in.bt.transpose().lazyProduct(in.bt);

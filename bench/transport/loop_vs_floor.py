@@ -203,9 +203,10 @@ def report(rows, out, seconds, scene="", sets=()):
              f"Written by `bench/transport/loop_vs_floor.py`; every row is one run of {seconds:g} s per path, all "
              "rows in one invocation. `floor`: a bare `clock_nanosleep` loop at the rate (cyclictest's method); "
              "`UDP`, `LCM`: bare round trips paced at the same rate and scheduling; `loop`: `gausstrack-run` (the "
-             "scene's plant and controller processes). Schedulers: `default`; `realtime` (SCHED_FIFO, "
-             "mlockall, the two processes pinned to the last two CPUs, one each); `realtime_1cpu` (the same, both "
-             "on the last CPU). Round trips and wake-up lateness in us (p50 / p99); "
+             "scene's plant and controller processes). Schedulers: `default`; `realtime` (SCHED_FIFO, the "
+             "plant's loop at 83 above its LCM receive thread at 82, the controller's loop and receive thread "
+             "at 80; mlockall; the two processes pinned to the last two CPUs, one each); `realtime_1cpu` (the "
+             "same, both on the last CPU). Round trips and wake-up lateness in us (p50 / p99); "
              "misses: wake-ups more than half a period late; ksoftirqd: CPU time of the kernel's deferred-softirq "
              "threads during the loop's run (packet delivery the kernel put off to a thread), in ms, beside the "
              "NET_RX softirqs run.", "",

@@ -381,11 +381,13 @@ class ConstraintSolver {
   // B^T = L^-1 D^T. Its columns' supports: D's rows' with a diagonal L; from the same first row
   // to the last with a dense one (the substitution fills in below).
   void set_bt() noexcept {
-    if constexpr (kSupports)
+    if constexpr (kSupports) {
       for (int i = 0; i < P; ++i) {
         bt_first_[i] = d_first_[i];
-        bt_end_[i] = kMass == MassMatrix::kDiagonal || d_end_[i] == 0 ? d_end_[i] : N;
+        bt_end_[i] = d_end_[i];
       }
+      if constexpr (kMass != MassMatrix::kDiagonal) small_dense::fill_in_below<N>(bt_end_, P);
+    }
     if constexpr (kMass == MassMatrix::kDiagonal) {
       for (int i = 0; i < P; ++i)
         for (int j = 0; j < N; ++j) bt_(j, i) = dt_(j, i) * inverse_sqrt_mass_(j);

@@ -189,6 +189,13 @@ void column_supports(const Eigen::Matrix<Scalar, N, K>& x, int* first, int* end)
   }
 }
 
+/// The supports of L^-1 x for a dense lower-triangular L from x's (column_supports): a column keeps
+/// its first row and, unless it is zero, fills in down to the last row.
+template <int N>
+void fill_in_below(int* end, int columns) noexcept {
+  for (int c = 0; c < columns; ++c) end[c] = end[c] == 0 ? 0 : N;
+}
+
 /// x = L^-1 x for every column of x (forward substitution, column-oriented), reciprocal[k] =
 /// 1 / L_kk. With `first` (see column_supports), column c is known to be zero above row
 /// first[c], and so is its answer: its steps start there.

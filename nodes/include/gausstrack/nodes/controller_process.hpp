@@ -60,7 +60,6 @@ int run_controller(const ControllerProcessOptions& o, const tracking::TrackingSp
   node.use_measured_delay(!spec.delay_configured);
   if (auth.enabled()) node.authenticate(*auth.states);
   lcm.subscribe(p.state_channel, &ControllerNode<M>::on_state, &node);
-  raise_loop_above_receiver(p, "gausstrack-controller");
   std::printf("gausstrack-controller: ready (%s, %d coordinates, %d constraint rows, %s)\n", spec.model.c_str(),
               M::kDof, M::kConstraints, auth.enabled() ? "authenticated" : "unauthenticated");
   std::fflush(stdout);

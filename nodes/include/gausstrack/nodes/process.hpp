@@ -105,13 +105,16 @@ inline void apply_realtime(const ProcessOptions& o, const char* program) {
   }
 }
 
-/// Raises the calling thread (the loop) one SCHED_FIFO priority above the one apply_realtime gave
-/// the process. Called once the LCM subscriptions exist, and so LCM's receive thread (created by the
-/// first subscription, inheriting apply_realtime's priority) stays one below: under SCHED_FIFO
-/// threads of one priority do not preempt each other, so the loop's timed wake-up would otherwise
-/// wait whenever it lands while the receive thread is taking a message off the socket. With the
-/// loop above it, the wake-up preempts the receive thread, which only queues messages for the loop.
-/// Does nothing without --rt-priority; what is not permitted is a warning, as in apply_realtime.
+/// Raises the calling thread (a loop woken by a clock: the plant's) one SCHED_FIFO priority above
+/// the one apply_realtime gave the process. Called once the LCM subscriptions exist, and so LCM's
+/// receive thread (created by the first subscription, inheriting apply_realtime's priority) stays
+/// one below: under SCHED_FIFO threads of one priority do not preempt each other, so the loop's
+/// timed wake-up would otherwise wait whenever it lands while the receive thread is taking a
+/// message off the socket. With the loop above it, the wake-up preempts the receive thread, which
+/// only queues messages for the loop. A loop woken by the receive thread's messages (the
+/// controller's) stays at its priority: above it, it would preempt the receive thread in the middle
+/// of the hand-over and then wait for it. Does nothing without --rt-priority; what is not
+/// permitted is a warning, as in apply_realtime.
 inline void raise_loop_above_receiver(const ProcessOptions& o, const char* program) {
   if (o.rt_priority <= 0) return;
   sched_param p{};
