@@ -209,7 +209,7 @@ class ConstraintSolver {
 
   /// Constraint force L B^+ rhs that the last successful solve's factorization gives for another
   /// right side (P): the part of Q' due to a term added to g. Zero if the last solve failed.
-  VectorN force_for_rhs(const VectorP& rhs) const noexcept {
+  [[gnu::always_inline]] VectorN force_for_rhs(const VectorP& rhs) const noexcept {
     if (!ready_) return VectorN::Zero();
     VectorN force;
     apply_pseudo_inverse(rhs, force, nullptr);
@@ -588,8 +588,8 @@ class ConstraintSolver {
   // L y = L L^-1 D^T w = D^T w: a product with D (N P) rather than with a dense L (N^2); a diagonal
   // L is N products. The sum of y's columns is B^T applied to the sum of w's.
   template <int K>
-  void apply_pseudo_inverse(const Eigen::Matrix<Scalar, P, K>& r, Eigen::Matrix<Scalar, N, K>& force,
-                            VectorN* y_sum) const noexcept {
+  [[gnu::always_inline]] void apply_pseudo_inverse(const Eigen::Matrix<Scalar, P, K>& r,
+                                                   Eigen::Matrix<Scalar, N, K>& force, VectorN* y_sum) const noexcept {
     if (used_ != InverseStrategy::kCholeskyWithFallback && used_ != InverseStrategy::kDampedLeastSquares) {
       apply_rank_revealing(r, force, y_sum);
       return;
