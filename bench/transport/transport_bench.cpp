@@ -10,7 +10,8 @@
 //   sleep  the same paced loop with nothing in it: how late the wake-ups are, and how many are
 //          later than half a period (the loop's deadline misses). The scheduler sets the timer
 //          slack to 1 ns, as it does in the plant.
-// --realtime applies what `gausstrack-run --realtime` applies: SCHED_FIFO 80, mlockall, the pacing
+// --realtime applies what `gausstrack-run --realtime` applies: SCHED_FIFO (80 for every thread here;
+// gausstrack-run raises the plant's loop to 83 and its receive thread to 82), mlockall, the pacing
 // process pinned to the last CPU and the answering one to the one before (--cpus A,B: the pacing
 // process on A, the answering one on B; A = B puts both on one CPU).
 // Prints p50/p99/p99.9/max of each and writes them as JSON.
