@@ -133,7 +133,7 @@ def command_lines(args, out):
         plant_cpu, controller_cpu = args.cpus or (cpus - 1, max(0, cpus - 2))
         for name, cpu in (("plant", plant_cpu), ("controller", controller_cpu)):
             # The plant above the controller: on a shared CPU the plant's clock (the physical world's) is
-            # not held up by the controller's work; each process's loop then runs one above its receiver.
+            # not held up by the controller's work; the plant's loop then runs one above its receiver.
             own[name] += ["--rt-priority", "82" if name == "plant" else "80", "--lock-memory", "--cpu", str(cpu)]
     part_logs = []
     if args.log:

@@ -78,6 +78,16 @@ inline PairAuth open_pair_auth(const ProcessOptions& o, const char* program) {
   return auth;
 }
 
+/// SCHED_FIFO at `priority` for the calling thread; where the system does not permit it, a warning
+/// on stderr and the thread keeps its scheduler.
+inline void set_fifo_priority(int priority, const char* program) {
+  sched_param p{};
+  p.sched_priority = priority;
+  if (sched_setscheduler(0, SCHED_FIFO, &p) != 0)
+    std::fprintf(stderr, "%s: warning: SCHED_FIFO priority %d not permitted (%s); running under the default "
+                         "scheduler\n", program, priority, std::strerror(errno));
+}
+
 /// Applies the real-time options asked for to the calling thread and to the threads it creates
 /// afterwards (they inherit the policy and the CPU). The processes call it after opening their
 /// message log (its writer stays an ordinary thread: it may be late, the log then drops and counts)
@@ -96,13 +106,7 @@ inline void apply_realtime(const ProcessOptions& o, const char* program) {
     if (sched_setaffinity(0, sizeof set, &set) != 0)
       std::fprintf(stderr, "%s: warning: cannot pin to CPU %d (%s)\n", program, o.cpu, std::strerror(errno));
   }
-  if (o.rt_priority > 0) {
-    sched_param p{};
-    p.sched_priority = o.rt_priority;
-    if (sched_setscheduler(0, SCHED_FIFO, &p) != 0)
-      std::fprintf(stderr, "%s: warning: SCHED_FIFO priority %d not permitted (%s); running under the default "
-                           "scheduler\n", program, o.rt_priority, std::strerror(errno));
-  }
+  if (o.rt_priority > 0) set_fifo_priority(o.rt_priority, program);
 }
 
 /// Raises the calling thread (a loop woken by a clock: the plant's) one SCHED_FIFO priority above
@@ -117,11 +121,7 @@ inline void apply_realtime(const ProcessOptions& o, const char* program) {
 /// permitted is a warning, as in apply_realtime.
 inline void raise_loop_above_receiver(const ProcessOptions& o, const char* program) {
   if (o.rt_priority <= 0) return;
-  sched_param p{};
-  p.sched_priority = std::min(o.rt_priority + 1, sched_get_priority_max(SCHED_FIFO));
-  if (sched_setscheduler(0, SCHED_FIFO, &p) != 0)
-    std::fprintf(stderr, "%s: warning: SCHED_FIFO priority %d for the loop not permitted (%s)\n", program,
-                 p.sched_priority, std::strerror(errno));
+  set_fifo_priority(std::min(o.rt_priority + 1, sched_get_priority_max(SCHED_FIFO)), program);
 }
 
 }  // namespace gausstrack::nodes
