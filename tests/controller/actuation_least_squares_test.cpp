@@ -1,5 +1,4 @@
-// The actuated law against a KKT solve at two more sizes (actuation_test.cpp has the others),
-// and the least-squares answer when the rows cannot all be actuated.
+// The actuated law's least-squares answer when the rows cannot all be actuated.
 
 #include <gtest/gtest.h>
 
@@ -9,19 +8,10 @@
 #include <limits>
 
 #include "actuation_systems.hpp"
-#include "gausstrack/systems/cart_pole.hpp"
 #include "oracles.hpp"
 
 namespace gausstrack::test {
 namespace {
-
-TEST(Actuation, LeastCostAtMoreSizes) {
-  RandomSource<double> rng(29);
-  for (bool gauss : {true, false}) {
-    expect_least_cost<5, 1, 5>(rng, gauss);
-    expect_least_cost<8, 3, 6>(rng, gauss);
-  }
-}
 
 // More rows than actuators: the least-squares answer W^(-1/2) (K W^(-1/2))^+ r, the rows flagged,
 // and the force still in the range of B.

@@ -1,8 +1,9 @@
 // The actuated law among rows the environment holds (kPhysicalRowMask): the control never pushes
 // along them, the motion is the physically constrained system's, and the commands are the least
 // cost ones, each against an independent formulation (a Lagrange-multiplier solve of the whole
-// problem, oracles.cpp); a model without physical rows or actuators gets eq. (32)'s force. That
-// the physically constrained law allocates nothing is in actuation_cart_pole_test.
+// problem, oracles.cpp), on random systems; the same on the differential drive, and a model
+// without physical rows, in actuation_physical_models_test. That the physically constrained law
+// allocates nothing is in actuation_cart_pole_test.
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
@@ -11,9 +12,6 @@
 #include <cstdint>
 
 #include "actuation_systems.hpp"
-#include "gausstrack/systems/coupled_duffing.hpp"
-#include "gausstrack/systems/differential_drive.hpp"
-#include "gausstrack/systems/duffing_chain.hpp"
 #include "oracles.hpp"
 
 namespace gausstrack::test {
@@ -147,157 +145,6 @@ TEST(PhysicalRows, ATaskRowThePhysicalRowsHoldIsGivenUp) {
     EXPECT_TRUE(near(out.control, expected.control, 1e-9, 1 + expected.control.norm(), "u"));
     EXPECT_EQ(out.unmet_rows, 0u);
   }
-}
-
-// The differential drive at random states, stabilization on: the commands are the least-cost ones
-// for the stabilized task, the no-slip row holds under the law's acceleration, and B = (drive,
-// yaw) gives no sideways force.
-TEST(PhysicalRows, DifferentialDriveAgainstTheOracle) {
-  using Robot = systems::DifferentialDrive<double>;
-  RandomSource<double> rng(test_seed() + 2);
-  ControllerOptions<double> o;
-  o.stabilization = {1.0, 4.0};
-  for (int k = 0; k < 50; ++k) {
-    Robot robot;
-    ActuatedController<Robot> c(robot, o);
-    const Eigen::Vector3d q = 2.0 * rng.template matrix<3, 1>(), qd = rng.template matrix<3, 1>();
-    const double t = 10.0 * std::abs(rng.uniform(0.0, 1.0));
-    ActuatedController<Robot>::Output out;
-    ASSERT_EQ(c.compute(q, qd, t, out), Status::kOk);
-    TermsOf<Robot> terms;
-    evaluate_model(robot, q, qd, t, terms);
-    Eigen::Matrix<double, 3, 2> B;
-    robot.actuation(q, t, B);
-    const MatrixXd A = terms.mass_matrix;
-    const MatrixXd D = terms.constraint_matrix;
-    VectorXd r(2);  // the task rows' stabilized right side
-    for (int i = 0; i < 2; ++i)
-      r(i) = terms.constraint_rhs(i) - 2 * 1.0 * 4.0 * terms.constraint_error_rate(i) -
-             16.0 * terms.constraint_error(i);
-    const auto [u, qdd] = oracle::physical_least_cost_control(
-        A, terms.nonlinear_force, terms.applied_force, D.bottomRows(1),
-        terms.constraint_rhs.tail(1), D.topRows(2), r, B,
-        MatrixXd(B.transpose() * A.inverse() * B));
-    EXPECT_TRUE(near(out.control, u, 1e-9, 1 + u.norm(), "u"));
-    EXPECT_TRUE(near(out.acceleration, qdd, 1e-9, 1 + qdd.norm(), "q''"));
-    const double sideways = -std::sin(q(2)) * out.force(0) + std::cos(q(2)) * out.force(1);
-    EXPECT_LE(std::abs(sideways), 1e-12 * (1 + out.force.norm()));
-    EXPECT_LE(std::abs(out.row_residual(2)), 1e-10 * (1 + qdd.norm()));
-  }
-}
-
-// The axle centre itself cannot be steered sideways: with no look-ahead the two task rows and the
-// no-slip row leave one direction the actuators cannot reach at an instant. The law says so
-// (rank 1 of 2, the row it gives up named), instead of a status of ok.
-TEST(PhysicalRows, TrackingTheAxleCentreIsFlaggedAsNotActuable) {
-  using Robot = systems::DifferentialDrive<double>;
-  Robot robot;
-  robot.look_ahead = 0.0;
-  ActuatedController<Robot> c(robot);
-  ActuatedController<Robot>::Output out;
-  const Eigen::Vector3d q(0.1, -0.2, 0.3), qd(0.5 * std::cos(0.3), 0.5 * std::sin(0.3), 0.2);
-  c.compute(q, qd, 1.0, out);
-  EXPECT_EQ(out.diagnostics.rank, 1);
-  EXPECT_TRUE(out.diagnostics.has(warning::kRankDeficient));
-  EXPECT_TRUE(out.diagnostics.has(warning::kConstraintsNotMet));
-  EXPECT_NE(out.unmet_rows & 0b011u, 0u);
-  EXPECT_EQ(out.unmet_rows & 0b100u, 0u);  // the ground's row is held regardless
-}
-
-// A model without physical rows or actuators, through the actuated law (B = I, Gauss's weight),
-// gets TrackingController's eq. (32) force, stabilization and robust term included.
-TEST(PhysicalRows, NoneDeclaredGivesTodaysLaw) {
-  using Duffing = systems::CoupledDuffing<double>;
-  ControllerOptions<double> o;
-  o.stabilization = {0.7, 15.0};
-  o.robust = {30.0, 0.05};  // the robust term, shared by both
-  ActuatedController<Duffing> actuated(Duffing{}, o);
-  TrackingController<Duffing> plain(Duffing{}, o);
-  RandomSource<double> rng(test_seed() + 3);
-  for (int k = 0; k < 50; ++k) {
-    const Eigen::Vector2d q = rng.template matrix<2, 1>(), qd = 5.0 * rng.template matrix<2, 1>();
-    const double t = std::abs(rng.uniform(0.0, 3.0));
-    ActuatedController<Duffing>::Output a;
-    TrackingController<Duffing>::Output p;
-    ASSERT_EQ(actuated.compute(q, qd, t, a), Status::kOk);
-    ASSERT_EQ(plain.compute(q, qd, t, p), Status::kOk);
-    EXPECT_TRUE(near(a.force, p.force, 1e-10, 1 + p.force.norm(), "force"));
-    EXPECT_TRUE(near(a.feedforward, p.feedforward, 1e-10, 1 + p.force.norm(), "feedforward"));
-    EXPECT_TRUE(near(a.stabilizing, p.stabilizing, 1e-10, 1 + p.force.norm(), "stabilizing"));
-  }
-}
-
-TEST(PhysicalRows, APhysicalRowTakesNoStabilization) {
-  ActuatedController<systems::DifferentialDrive<double>> c;
-  EXPECT_TRUE(c.set_stabilization(0, {1.0, 5.0}));
-  EXPECT_FALSE(c.set_stabilization(2, {1.0, 5.0}));
-}
-
-// Task rows switched at run time: with row 1 off the law is the one of the model without that
-// row (no rank deficiency, the row never named unmet), and on again the full law.
-TEST(SwitchedRows, AnInactiveRowIsAbsent) {
-  RandomSource<double> rng(test_seed() + 4);
-  using Full = GivenSystem<5, 3, 4>;
-  using Part = GivenSystem<5, 2, 4>;
-  for (int k = 0; k < 20; ++k) {
-    const Full full = Full::random(rng);
-    Part part;
-    part.A = full.A, part.f = full.f, part.Q = full.Q, part.B = full.B;
-    part.D << full.D.row(0), full.D.row(2);
-    part.g << full.g(0), full.g(2);
-    ActuatedController<Full> c(full), fresh(full);
-    ActuatedController<Part> without(part);
-    ASSERT_TRUE(c.set_row_active(1, false));
-    EXPECT_FALSE(c.row_active(1));
-    EXPECT_TRUE(c.row_active(0));
-    ActuatedController<Full>::Output out, all;
-    ActuatedController<Part>::Output expected;
-    const Eigen::Matrix<double, 5, 1> zero = Eigen::Matrix<double, 5, 1>::Zero();
-    ASSERT_EQ(c.compute(zero, zero, 0.0, out), Status::kOk);
-    ASSERT_EQ(without.compute(zero, zero, 0.0, expected), Status::kOk);
-    EXPECT_TRUE(near(out.control, expected.control, 1e-10, 1 + expected.control.norm(), "u, row 1 off"));
-    EXPECT_EQ(out.diagnostics.rank, 2);
-    EXPECT_FALSE(out.diagnostics.has(warning::kRankDeficient));
-    EXPECT_EQ(out.unmet_rows, 0u);
-    EXPECT_GT(std::abs(out.row_residual(1)), 1e-6);  // not held, and reported as such
-    ASSERT_TRUE(c.set_row_active(1, true));
-    ASSERT_EQ(c.compute(zero, zero, 0.0, out), Status::kOk);
-    ASSERT_EQ(fresh.compute(zero, zero, 0.0, all), Status::kOk);
-    EXPECT_TRUE(near(out.control, all.control, 1e-12, 1 + all.control.norm(), "u, row 1 on again"));
-  }
-}
-
-// A row that comes back is stabilized from its current error, hold included: after running with
-// the row off, the first answer with it on equals a fresh controller's at that state.
-TEST(SwitchedRows, ARowThatComesBackStartsFromItsCurrentError) {
-  using Chain = systems::DuffingChain<8, 4, double>;
-  ControllerOptions<double> o;
-  o.stabilization = {1.0, 20.0};
-  o.hold = {1e-3, 0.0};
-  ActuatedController<Chain> c(Chain{}, o), fresh(Chain{}, o);
-  ActuatedController<Chain>::Output out, expected;
-  RandomSource<double> rng(test_seed() + 5);
-  ASSERT_TRUE(c.set_row_active(2, false));
-  Eigen::Matrix<double, 8, 1> q, qd;
-  for (int k = 0; k < 5; ++k) {
-    q = 0.1 * rng.matrix<8, 1>(), qd = rng.matrix<8, 1>();
-    ASSERT_EQ(c.compute(q, qd, 1e-3 * k, out), Status::kOk);
-  }
-  ASSERT_TRUE(c.set_row_active(2, true));
-  ASSERT_EQ(c.compute(q, qd, 5e-3, out), Status::kOk);
-  ASSERT_EQ(fresh.compute(q, qd, 5e-3, expected), Status::kOk);
-  EXPECT_TRUE(near(out.control, expected.control, 1e-12, 1 + expected.control.norm(), "u"));
-  EXPECT_GT(std::abs(out.constraint_error(2)), 1e-3);  // it does come back with an error
-  EXPECT_GT(out.control_stabilizing.norm(), 1e-3 * out.control.norm());
-}
-
-TEST(SwitchedRows, PhysicalRowsCannotBeSwitchedOff) {
-  ActuatedController<systems::DifferentialDrive<double>> c;
-  EXPECT_FALSE(c.set_row_active(2, false));
-  EXPECT_FALSE(c.set_row_active(3, false));
-  EXPECT_FALSE(c.set_row_active(-1, true));
-  EXPECT_TRUE(c.set_row_active(0, false));
-  EXPECT_FALSE(c.row_active(2));  // not a task row at all
 }
 
 }  // namespace
