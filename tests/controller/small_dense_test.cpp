@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <random>
 
 #include "gausstrack/small_dense.hpp"
@@ -36,6 +39,47 @@ TEST(SmallDense, CholeskyRejectsWhatIsNotPositiveDefinite) {
   pair << 4, 0, 0, 0, 0, 4, 0, 0, 0, 0, 1, 3, 0, 0, 3, 1;
   double r4[4];
   EXPECT_FALSE(small_dense::cholesky_in_place(pair, r4));
+}
+
+// all_finite against std::isfinite: every special value (infinities, NaNs of both signs, the
+// largest and the subnormal values, zeros) at every position of every length up to 40.
+template <typename Scalar>
+void expect_all_finite_matches_isfinite() {
+  using limits = std::numeric_limits<Scalar>;
+  const Scalar specials[] = {Scalar(0), -Scalar(0), Scalar(1), limits::max(), -limits::max(), limits::min(),
+                             limits::denorm_min(), -limits::denorm_min(), limits::infinity(), -limits::infinity(),
+                             limits::quiet_NaN(), -limits::quiet_NaN(), limits::signaling_NaN()};
+  for (const Scalar v : specials) {
+    for (int n = 1; n <= 40; ++n) {
+      for (int at = 0; at < n; ++at) {
+        Scalar x[40];
+        for (int i = 0; i < n; ++i) x[i] = Scalar(i) - Scalar(7.5);
+        x[at] = v;
+        ASSERT_EQ(small_dense::all_finite(x, n), std::isfinite(v)) << v << " at " << at << " of " << n;
+      }
+    }
+  }
+  EXPECT_TRUE(small_dense::all_finite(static_cast<const Scalar*>(nullptr), 0));
+}
+
+TEST(SmallDense, AllFiniteMatchesIsfinite) {
+  expect_all_finite_matches_isfinite<double>();
+  expect_all_finite_matches_isfinite<float>();
+}
+
+// A NaN counts as nonzero in a column's support, wherever it is; a zero column has none.
+TEST(SmallDense, SupportsCountANaNAndSkipAZeroColumn) {
+  for (int at = 0; at < 9; ++at) {
+    Eigen::Matrix<double, 9, 2> x = Eigen::Matrix<double, 9, 2>::Zero();
+    x(at, 0) = std::numeric_limits<double>::quiet_NaN();
+    x(4, 0) = 1.0;
+    int first[2], end[2];
+    small_dense::column_supports(x, first, end);
+    EXPECT_EQ(first[0], std::min(at, 4) & ~1) << "NaN at " << at;
+    EXPECT_EQ(end[0], std::max(at, 4) + 1) << "NaN at " << at;
+    EXPECT_EQ(first[1], 0);
+    EXPECT_EQ(end[1], 0);
+  }
 }
 
 // Columns that are zero outside a band (a constraint row touching a few coordinates): the

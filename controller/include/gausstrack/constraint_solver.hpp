@@ -313,8 +313,15 @@ class ConstraintSolver {
     SolveDiagnostics<Scalar>& diag = out.diagnostics;
     // Squared norms: one square root (the reported residual), none for the scale.
     VectorP residual;
-    small_dense::multiply(D.data(), P, N, out.acceleration.data(), residual.data());
-    for (int i = 0; i < P; ++i) residual(i) -= g(i);
+    if constexpr (kSupports) {
+      // Row i of D q'' over the coordinates the row can touch (D^T's column, kept with its support).
+      for (int i = 0; i < P; ++i)
+        residual(i) = small_dense::dot(dt_.data() + i * N + d_first_[i], out.acceleration.data() + d_first_[i],
+                                       d_end_[i] - d_first_[i]) - g(i);
+    } else {
+      small_dense::multiply(D.data(), P, N, out.acceleration.data(), residual.data());
+      for (int i = 0; i < P; ++i) residual(i) -= g(i);
+    }
     const Scalar residual2 = squared_norm(residual.data(), P);
     const Scalar scale2 = squared_norm(g.data(), P) + d_norm2_ * squared_norm(out.acceleration.data(), N);
     bool met;
@@ -497,8 +504,9 @@ class ConstraintSolver {
       for (int i = 0; i < P; ++i) column += std::abs(gram(i, j));
       norm1 = std::max(norm1, column);
     }
-    if (!small_dense::cholesky_in_place(gram)) return false;
-    inverse_norm2 = small_dense::invert_lower(gram, gram_l_inv_);
+    Scalar reciprocal[P];
+    if (!small_dense::cholesky_in_place(gram, reciprocal)) return false;
+    inverse_norm2 = small_dense::invert_lower(gram, reciprocal, gram_l_inv_);
     return true;
   }
 

@@ -12,6 +12,10 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <type_traits>
 
 namespace gausstrack::small_dense {
 
@@ -19,26 +23,30 @@ namespace gausstrack::small_dense {
 // whatever Eigen's storage order): the solver's whole-matrix checks and products without an Eigen
 // expression per use.
 
-/// Every entry finite. Short arrays entry by entry (the first non-finite one ends the test); long
-/// ones by x - x, which is 0 for a finite x and NaN otherwise, summed in four independent chains
-/// without a branch (a sum of them stays 0 only when every entry is finite).
+/// Every entry finite, from the bits: an IEEE value is finite unless its exponent field is all
+/// ones, and adding the exponent's lowest bit to the field carries into the sign bit exactly then.
+/// One AND, one addition and one OR per entry, in integers, so the loop vectorizes (a sum of
+/// x - x in floating point is a dependent chain) and costs the same on a soft-float target.
 template <typename Scalar>
 bool all_finite(const Scalar* x, int count) noexcept {
-  if (count < 16) {
+  if constexpr (std::numeric_limits<Scalar>::is_iec559 && (sizeof(Scalar) == 8 || sizeof(Scalar) == 4)) {
+    using Bits = std::conditional_t<sizeof(Scalar) == 8, std::uint64_t, std::uint32_t>;
+    constexpr int kMantissa = std::numeric_limits<Scalar>::digits - 1;  // 52 or 23 bits
+    constexpr Bits kExponent = ((Bits(1) << (sizeof(Scalar) * 8 - 1)) - 1) & ~((Bits(1) << kMantissa) - 1);
+    constexpr Bits kLowest = Bits(1) << kMantissa;
+    constexpr Bits kSign = Bits(1) << (sizeof(Scalar) * 8 - 1);
+    Bits carried = 0;
+    for (int i = 0; i < count; ++i) {
+      Bits b;
+      std::memcpy(&b, x + i, sizeof b);
+      carried |= (b & kExponent) + kLowest;
+    }
+    return (carried & kSign) == 0;
+  } else {
     for (int i = 0; i < count; ++i)
       if (!std::isfinite(x[i])) return false;
     return true;
   }
-  Scalar s0(0), s1(0), s2(0), s3(0);
-  int i = 0;
-  for (; i + 4 <= count; i += 4) {
-    s0 += x[i] - x[i];
-    s1 += x[i + 1] - x[i + 1];
-    s2 += x[i + 2] - x[i + 2];
-    s3 += x[i + 3] - x[i + 3];
-  }
-  for (; i < count; ++i) s0 += x[i] - x[i];
-  return (s0 + s1) + (s2 + s3) == Scalar(0);
 }
 
 /// x . y; from 8 entries with four partial sums side by side (a dot product's one accumulator is
@@ -177,15 +185,15 @@ void update_from_even(int first, int end, Update update) noexcept {
 template <typename Scalar, int N, int K>
 void column_supports(const Eigen::Matrix<Scalar, N, K>& x, int* first, int* end) noexcept {
   for (int c = 0; c < K; ++c) {
+    // The first nonzero from the top, the last from the bottom: a banded column is read about
+    // once, and each scan is a compare and a branch taken the same way until it stops.
     const Scalar* xc = x.data() + c * N;
-    int lo = N, hi = 0;
-    for (int i = 0; i < N; ++i) {
-      const bool nonzero = !(xc[i] == Scalar(0));
-      lo = nonzero && i < lo ? i : lo;
-      hi = nonzero ? i + 1 : hi;
-    }
-    first[c] = hi == 0 ? 0 : lo & ~1;
-    end[c] = hi;
+    int lo = 0;
+    while (lo < N && xc[lo] == Scalar(0)) ++lo;
+    int hi = N;
+    while (hi > lo && xc[hi - 1] == Scalar(0)) --hi;
+    first[c] = hi == lo ? 0 : lo & ~1;
+    end[c] = hi == lo ? 0 : hi;
   }
 }
 
@@ -368,30 +376,38 @@ void gram(const Eigen::Matrix<Scalar, N, K>& x, Eigen::Matrix<Scalar, K, K>& g, 
     for (int i = 0; i < j; ++i) g(i, j) = g(j, i);
 }
 
-/// The lower triangle of `inverse` becomes L^-1 (its upper triangle zero); returns the sum of
-/// squares of L^-1's entries, ||L^-1||_F^2.
+/// The lower triangle of `inverse` becomes L^-1 (its upper triangle zero), given L's diagonal's
+/// reciprocals (cholesky_in_place's); returns the sum of squares of L^-1's entries, ||L^-1||_F^2.
 template <typename Scalar, int N>
-Scalar invert_lower(const Eigen::Matrix<Scalar, N, N>& l, Eigen::Matrix<Scalar, N, N>& inverse) noexcept {
+Scalar invert_lower(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* reciprocal,
+                    Eigen::Matrix<Scalar, N, N>& inverse) noexcept {
   const Scalar* a = l.data();
   Scalar* z = inverse.data();
-  Scalar sum(0);
-  Scalar reciprocal[N];
-  for (int k = 0; k < N; ++k) reciprocal[k] = Scalar(1) / a[k * N + k];
-  // Column c of L^-1 solves L z = e_c; its rows above c are zero. Step k runs for every column
-  // that has reached it: independent chains side by side.
   for (int i = 0; i < N * N; ++i) z[i] = Scalar(0);
   for (int c = 0; c < N; ++c) z[c * N + c] = Scalar(1);
+  // Column c of L^-1 solves L z = e_c; its rows above c are zero. Step k runs for every column
+  // that has reached it: independent chains side by side.
   for (int k = 0; k < N; ++k) {
     const Scalar* ck = a + k * N;
+    const Scalar rk = reciprocal[k];
     for (int c = 0; c <= k; ++c) {
       Scalar* zc = z + c * N;
-      const Scalar v = zc[k] * reciprocal[k];
+      const Scalar v = zc[k] * rk;
       zc[k] = v;
-      sum += v * v;
       for (int i = k + 1; i < N; ++i) zc[i] -= ck[i] * v;
     }
   }
-  return sum;
+  // The squares summed afterwards, in squared_norm's independent chains (the upper triangle adds
+  // zeros), rather than as one chain through the substitution.
+  return squared_norm(z, N * N);
+}
+
+/// The same, taking the diagonal's reciprocals itself.
+template <typename Scalar, int N>
+Scalar invert_lower(const Eigen::Matrix<Scalar, N, N>& l, Eigen::Matrix<Scalar, N, N>& inverse) noexcept {
+  Scalar reciprocal[N];
+  reciprocal_diagonal(l, reciprocal);
+  return invert_lower(l, reciprocal, inverse);
 }
 
 }  // namespace gausstrack::small_dense
