@@ -20,16 +20,14 @@ struct Expected {
   Eigen::MatrixXd l, lower_solve, lower_transposed_solve, lower_product, gram;
 };
 
-inline Expected eigen_answers(const Eigen::MatrixXd& a, const Eigen::MatrixXd& x0) {
+inline void eigen_answers(const Eigen::MatrixXd& a, const Eigen::MatrixXd& x0, Expected& e) {
   const Eigen::LLT<Eigen::MatrixXd> llt(a);
-  EXPECT_EQ(llt.info(), Eigen::Success);
-  Expected e;
+  ASSERT_EQ(llt.info(), Eigen::Success);
   e.l = llt.matrixL();
   e.lower_solve = e.l.triangularView<Eigen::Lower>().solve(x0);
   e.lower_transposed_solve = e.l.transpose().triangularView<Eigen::Upper>().solve(x0);
   e.lower_product = e.l * x0;
   e.gram = x0.transpose() * x0;
-  return e;
 }
 
 // |got - expected| <= tol (1 + |expected|), in double whatever the kernel's scalar.
@@ -54,7 +52,8 @@ void expect_kernels_match_eigen(unsigned seed) {
   MatrixNK x0;
   for (int i = 0; i < N * K; ++i) x0.data()[i] = Scalar(u(rng));
   // The oracle factors the matrix the kernel sees (rounded to Scalar), in double.
-  const Expected e = eigen_answers(a.template cast<double>(), x0.template cast<double>());
+  Expected e;
+  ASSERT_NO_FATAL_FAILURE(eigen_answers(a.template cast<double>(), x0.template cast<double>(), e));
   const auto wide = [](const auto& m) -> Eigen::MatrixXd { return m.template cast<double>(); };
 
   MatrixNN l = a;

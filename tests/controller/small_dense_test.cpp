@@ -67,12 +67,13 @@ TEST(SmallDense, AllFiniteMatchesIsfinite) {
   expect_all_finite_matches_isfinite<float>();
 }
 
-// A NaN counts as nonzero in a column's support, wherever it is; a zero column has none.
+// A NaN counts as nonzero in a column's support, wherever it is (alone in it too); a zero column
+// has none.
 TEST(SmallDense, SupportsCountANaNAndSkipAZeroColumn) {
   for (int at = 0; at < 9; ++at) {
     Eigen::Matrix<double, 9, 2> x = Eigen::Matrix<double, 9, 2>::Zero();
-    x(at, 0) = std::numeric_limits<double>::quiet_NaN();
     x(4, 0) = 1.0;
+    x(at, 0) = std::numeric_limits<double>::quiet_NaN();  // at 4: the column's only nonzero
     int first[2], end[2];
     small_dense::column_supports(x, first, end);
     EXPECT_EQ(first[0], std::min(at, 4) & ~1) << "NaN at " << at;

@@ -27,8 +27,8 @@ namespace gausstrack::small_dense {
 /// 32-bit core this is fewer instructions than the bits of a double). Long ones from the bits: an
 /// IEEE value is finite unless its exponent field is all ones, and adding the exponent's lowest
 /// bit to the field carries into the sign bit exactly then. One AND, one addition and one OR per
-/// entry, in integers, so the loop vectorizes (a sum of x - x in floating point is a dependent
-/// chain).
+/// entry, in integers, so the loop vectorizes (a floating-point sum of x - x runs as a few
+/// dependent chains of additions).
 template <typename Scalar>
 bool all_finite(const Scalar* x, int count) noexcept {
   if (count < 16) {
