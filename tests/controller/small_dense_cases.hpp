@@ -17,13 +17,14 @@ namespace gausstrack::test {
 // Eigen's answers at run-time size and in double precision, computed once per case outside the
 // size templates (a fixed-size LLT and triangular solve per size made this file minutes to build).
 struct Expected {
-  Eigen::MatrixXd l, lower_solve, lower_transposed_solve, lower_product, gram;
+  Eigen::MatrixXd l, l_inverse, lower_solve, lower_transposed_solve, lower_product, gram;
 };
 
 inline void eigen_answers(const Eigen::MatrixXd& a, const Eigen::MatrixXd& x0, Expected& e) {
   const Eigen::LLT<Eigen::MatrixXd> llt(a);
   ASSERT_EQ(llt.info(), Eigen::Success);
   e.l = llt.matrixL();
+  e.l_inverse = e.l.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(a.rows(), a.cols()));
   e.lower_solve = e.l.triangularView<Eigen::Lower>().solve(x0);
   e.lower_transposed_solve = e.l.transpose().triangularView<Eigen::Upper>().solve(x0);
   e.lower_product = e.l * x0;
@@ -84,6 +85,20 @@ void expect_kernels_match_eigen(unsigned seed) {
   x = x0;
   small_dense::multiply_lower_in_place(l, x);
   EXPECT_TRUE(near(wide(x), e.lower_product, tol)) << "L x, N " << N << " K " << K;
+
+  // L^-1 (lower triangle; the upper one exactly zero) and its squared Frobenius norm, with the
+  // factor's reciprocals and with its own.
+  MatrixNN z;
+  const Scalar norm2 = small_dense::invert_lower(l, reciprocal, z);
+  const double expected_norm2 = e.l_inverse.squaredNorm();
+  EXPECT_LE((wide(z) - e.l_inverse).norm(), tol * e.l_inverse.norm()) << "L^-1 (inverse), N " << N;
+  EXPECT_NEAR(double(norm2), expected_norm2, tol * expected_norm2) << "||L^-1||_F^2, N " << N;
+  for (int j = 1; j < N; ++j)
+    for (int i = 0; i < j; ++i) EXPECT_EQ(z(i, j), Scalar(0)) << "L^-1 upper (" << i << ", " << j << "), N " << N;
+  MatrixNN z_own;
+  EXPECT_NEAR(double(small_dense::invert_lower(l, z_own)), expected_norm2, tol * expected_norm2)
+      << "||L^-1||_F^2 (own reciprocals), N " << N;
+  EXPECT_LE((wide(z_own) - e.l_inverse).norm(), tol * e.l_inverse.norm()) << "L^-1 (own reciprocals), N " << N;
 
   Eigen::Matrix<Scalar, K, K> g;
   small_dense::gram(x0, g);

@@ -62,6 +62,40 @@ void expect_all_finite_matches_isfinite() {
   EXPECT_TRUE(small_dense::all_finite(static_cast<const Scalar*>(nullptr), 0));
 }
 
+// all_equal against a == b entry by entry, for a finite b: one entry of a changed to each special
+// value at every position of every length up to 40 (zeros of either sign are equal; a NaN, an
+// infinity, the next representable value and a difference that overflows are not).
+template <typename Scalar>
+void expect_all_equal_matches_compare() {
+  using limits = std::numeric_limits<Scalar>;
+  const Scalar specials[] = {Scalar(0), -Scalar(0), Scalar(1), limits::max(), -limits::max(), limits::min(),
+                             limits::denorm_min(), limits::infinity(), -limits::infinity(), limits::quiet_NaN(),
+                             -limits::quiet_NaN()};
+  for (const Scalar v : specials) {
+    for (const Scalar w : {Scalar(0), -Scalar(0), Scalar(1), limits::max(), -limits::max(), limits::denorm_min()}) {
+      for (int n = 1; n <= 40; ++n) {
+        for (int at = 0; at < n; ++at) {
+          Scalar a[40], b[40];
+          for (int i = 0; i < n; ++i) a[i] = b[i] = Scalar(i) - Scalar(7.5);
+          a[at] = v;
+          b[at] = w;
+          ASSERT_EQ(small_dense::all_equal(a, b, n), v == w) << v << " against " << w << " at " << at << " of " << n;
+        }
+      }
+    }
+    Scalar a[3] = {Scalar(1), v, Scalar(2)};  // the next value up differs
+    Scalar b[3] = {Scalar(1), v, std::nextafter(Scalar(2), Scalar(3))};
+    if (std::isfinite(v)) {
+      ASSERT_FALSE(small_dense::all_equal(a, b, 3)) << v;
+    }
+  }
+}
+
+TEST(SmallDense, AllEqualMatchesCompare) {
+  expect_all_equal_matches_compare<double>();
+  expect_all_equal_matches_compare<float>();
+}
+
 TEST(SmallDense, AllFiniteMatchesIsfinite) {
   expect_all_finite_matches_isfinite<double>();
   expect_all_finite_matches_isfinite<float>();

@@ -286,7 +286,7 @@ class ConstraintSolver {
       read_constraint_matrix(D);
     }
     std::uint32_t bad = 0;
-    if (!same_mass && !mass_finite(A)) bad |= input::kMassMatrix;
+    if (!same_mass && !load_mass(A)) bad |= input::kMassMatrix;
     if (!all_finite(f.data(), N)) bad |= input::kNonlinearForce;
     if (!all_finite(Q.data(), N)) bad |= input::kAppliedForce;
     if (!same_factors && !std::isfinite(d_norm2_) && !all_finite(D.data(), P * N)) bad |= input::kConstraintMatrix;
@@ -353,15 +353,18 @@ class ConstraintSolver {
       return small_dense::all_equal(A.data(), mass_key_.data(), N * N);
     }
   }
-  static bool mass_finite(const MatrixNN& A) noexcept {
+  // A's finiteness; a dense A is copied into mass_l_ on the way (one pass), for factor_mass to
+  // factor in place.
+  bool load_mass(const MatrixNN& A) noexcept {
     if constexpr (kMass == MassMatrix::kDiagonal) {
       for (int i = 0; i < N; ++i)
         if (!std::isfinite(A(i, i))) return false;
       return true;
     } else {
-      return small_dense::all_finite(A.data(), N * N);
+      return small_dense::all_finite(A.data(), N * N, mass_l_.data());
     }
   }
+  // The factor of the finite A load_mass has read.
   bool factor_mass(const MatrixNN& A) noexcept {
     if constexpr (kMass == MassMatrix::kDiagonal) {
       for (int i = 0; i < N; ++i) {
@@ -374,14 +377,12 @@ class ConstraintSolver {
       return true;
     } else {
       if (options_.reuse_factorization) mass_key_ = A;  // only compared when kept
-      mass_l_ = A;
       return small_dense::cholesky_in_place(mass_l_, mass_reciprocal_.data());
     }
   }
   // D^T into dt_, ||D||_F^2 into d_norm2_, and where each row of D can be nonzero.
   void read_constraint_matrix(const MatrixPN& D) noexcept {
-    for (int i = 0; i < P; ++i)
-      for (int j = 0; j < N; ++j) dt_(j, i) = D(i, j);
+    dt_ = D.transpose();
     d_norm2_ = small_dense::squared_norm(dt_.data(), N * P);
     if constexpr (kSupports) small_dense::column_supports(dt_, d_first_, d_end_);
   }
@@ -396,8 +397,7 @@ class ConstraintSolver {
       if constexpr (kMass != MassMatrix::kDiagonal) small_dense::fill_in_below<N>(bt_end_, P);
     }
     if constexpr (kMass == MassMatrix::kDiagonal) {
-      for (int i = 0; i < P; ++i)
-        for (int j = 0; j < N; ++j) bt_(j, i) = dt_(j, i) * inverse_sqrt_mass_(j);
+      bt_.noalias() = inverse_sqrt_mass_.asDiagonal() * dt_;  // Eigen's vectorized product
     } else {
       bt_ = dt_;
       small_dense::solve_lower_in_place(mass_l_, mass_reciprocal_.data(), bt_, kSupports ? bt_first_ : nullptr);
@@ -606,8 +606,10 @@ class ConstraintSolver {
     if constexpr (P == 1) {
       for (int k = 0; k < K; ++k) w(0, k) *= inverse_gram_;
     } else {
-      small_dense::multiply_lower_in_place(gram_l_inv_, w);
-      small_dense::multiply_lower_transposed_in_place(gram_l_inv_, w);
+      // L^-1 is kept with its upper triangle zero: two products as dense ones, Eigen's
+      // coefficient-based kernels vectorized down the columns.
+      const Eigen::Matrix<Scalar, P, K> z = gram_l_inv_.lazyProduct(w);
+      w.noalias() = gram_l_inv_.transpose().lazyProduct(z);
     }
     // Products down the N x P factors' columns, into locals (the outputs might alias the factors,
     // as far as the compiler knows).

@@ -23,31 +23,59 @@ namespace gausstrack::small_dense {
 // whatever Eigen's storage order): the solver's whole-matrix checks and products without an Eigen
 // expression per use.
 
-/// Every entry finite. Short arrays entry by entry (the first non-finite one ends the test; on a
-/// 32-bit core this is fewer instructions than the bits of a double). Long ones from the bits: an
-/// IEEE value is finite unless its exponent field is all ones, and adding the exponent's lowest
-/// bit to the field carries into the sign bit exactly then. One AND, one addition and one OR per
-/// entry, in integers, so the loop vectorizes (a floating-point sum of x - x runs as a few
-/// dependent chains of additions).
+namespace detail {
+// The unsigned integer of an IEEE float's or double's size, for the bit tests below; void for
+// other types, which take the floating-point tests instead.
 template <typename Scalar>
-bool all_finite(const Scalar* x, int count) noexcept {
-  constexpr bool kFromBits = std::numeric_limits<Scalar>::is_iec559 && (sizeof(Scalar) == 8 || sizeof(Scalar) == 4);
-  if (!kFromBits || count < 16) {
+using IeeeBits = std::conditional_t<
+    !std::numeric_limits<Scalar>::is_iec559, void,
+    std::conditional_t<sizeof(Scalar) == 8, std::uint64_t, std::conditional_t<sizeof(Scalar) == 4, std::uint32_t, void>>>;
+template <typename Scalar>
+inline constexpr bool kHasIeeeBits = !std::is_void_v<IeeeBits<Scalar>>;
+}  // namespace detail
+
+/// Every entry finite, and when `copy` is given, the entries copied into it on the way (one pass
+/// over a matrix the caller keeps anyway). Short arrays entry by entry (the first non-finite one
+/// ends a test without a copy; on a 32-bit core this is fewer instructions than the bits of a
+/// double). Long ones from the bits: an IEEE value is finite unless its exponent field is all
+/// ones, and adding the exponent's lowest bit to the field carries into the sign bit exactly then.
+/// One AND, one addition and one OR per entry, in integers, so the loop vectorizes (a
+/// floating-point sum of x - x runs as a few dependent chains of additions).
+template <typename Scalar>
+bool all_finite(const Scalar* x, int count, Scalar* copy = nullptr) noexcept {
+  if (!detail::kHasIeeeBits<Scalar> || count < 16) {
+    if (copy != nullptr) {
+      bool finite = true;
+      for (int i = 0; i < count; ++i) {
+        copy[i] = x[i];
+        finite = finite && std::isfinite(x[i]);
+      }
+      return finite;
+    }
     for (int i = 0; i < count; ++i)
       if (!std::isfinite(x[i])) return false;
     return true;
   }
-  if constexpr (kFromBits) {
-    using Bits = std::conditional_t<sizeof(Scalar) == 8, std::uint64_t, std::uint32_t>;
+  if constexpr (detail::kHasIeeeBits<Scalar>) {
+    using Bits = detail::IeeeBits<Scalar>;
     constexpr int kMantissa = std::numeric_limits<Scalar>::digits - 1;  // 52 or 23 bits
     constexpr Bits kExponent = ((Bits(1) << (sizeof(Scalar) * 8 - 1)) - 1) & ~((Bits(1) << kMantissa) - 1);
     constexpr Bits kLowest = Bits(1) << kMantissa;
     constexpr Bits kSign = Bits(1) << (sizeof(Scalar) * 8 - 1);
     Bits carried = 0;
-    for (int i = 0; i < count; ++i) {
-      Bits b;
-      std::memcpy(&b, x + i, sizeof b);
-      carried |= (b & kExponent) + kLowest;
+    if (copy != nullptr) {
+      for (int i = 0; i < count; ++i) {
+        Bits b;
+        std::memcpy(&b, x + i, sizeof b);
+        std::memcpy(copy + i, &b, sizeof b);
+        carried |= (b & kExponent) + kLowest;
+      }
+    } else {
+      for (int i = 0; i < count; ++i) {
+        Bits b;
+        std::memcpy(&b, x + i, sizeof b);
+        carried |= (b & kExponent) + kLowest;
+      }
     }
     return (carried & kSign) == 0;
   }
@@ -76,12 +104,31 @@ Scalar dot(const Scalar* x, const Scalar* y, int count) noexcept {
   return (s0 + s1) + (s2 + s3);
 }
 
-/// a == b entry by entry (so 0 == -0, and NaN equals nothing).
+/// a == b entry by entry (so 0 == -0, and NaN equals nothing), for arrays whose b is finite
+/// (an infinite a then differs, as it does from every finite b). With IEEE bits: every a - b is
+/// a zero of either sign exactly when the entries are equal (the difference of two finite
+/// values is zero only when they are equal; a NaN or infinite a makes it NaN or infinite), and
+/// the magnitudes' bits of the differences are ORed: a subtraction, an AND and an OR per entry,
+/// which vectorize (a bool accumulated by compares does not). No early exit: the usual answer
+/// is yes.
 template <typename Scalar>
 bool all_equal(const Scalar* a, const Scalar* b, int count) noexcept {
-  bool same = true;  // no early exit: the usual answer is yes, and compares without branches vectorize
-  for (int i = 0; i < count; ++i) same &= a[i] == b[i];
-  return same;
+  if constexpr (detail::kHasIeeeBits<Scalar>) {
+    using Bits = detail::IeeeBits<Scalar>;
+    constexpr Bits kMagnitude = ~Bits(0) >> 1;
+    Bits differ = 0;
+    for (int i = 0; i < count; ++i) {
+      const Scalar d = a[i] - b[i];
+      Bits bits;
+      std::memcpy(&bits, &d, sizeof bits);
+      differ |= bits & kMagnitude;
+    }
+    return differ == 0;
+  } else {
+    bool same = true;
+    for (int i = 0; i < count; ++i) same &= a[i] == b[i];
+    return same;
+  }
 }
 
 template <typename Scalar>
@@ -383,28 +430,25 @@ void gram(const Eigen::Matrix<Scalar, N, K>& x, Eigen::Matrix<Scalar, K, K>& g, 
 
 /// The lower triangle of `inverse` becomes L^-1 (its upper triangle zero), given L's diagonal's
 /// reciprocals (cholesky_in_place's); returns the sum of squares of L^-1's entries, ||L^-1||_F^2.
+/// Column c of L^-1 solves L z = e_c and is zero above row c: solve_lower_in_place on the
+/// identity with those supports, two steps at a time (written out up to 2 x 2).
 template <typename Scalar, int N>
 Scalar invert_lower(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* reciprocal,
                     Eigen::Matrix<Scalar, N, N>& inverse) noexcept {
-  const Scalar* a = l.data();
-  Scalar* z = inverse.data();
-  for (int i = 0; i < N * N; ++i) z[i] = Scalar(0);
-  for (int c = 0; c < N; ++c) z[c * N + c] = Scalar(1);
-  // Column c of L^-1 solves L z = e_c; its rows above c are zero. Step k runs for every column
-  // that has reached it: independent chains side by side.
-  for (int k = 0; k < N; ++k) {
-    const Scalar* ck = a + k * N;
-    const Scalar rk = reciprocal[k];
-    for (int c = 0; c <= k; ++c) {
-      Scalar* zc = z + c * N;
-      const Scalar v = zc[k] * rk;
-      zc[k] = v;
-      for (int i = k + 1; i < N; ++i) zc[i] -= ck[i] * v;
+  if constexpr (N <= 2) {
+    inverse.setZero();
+    inverse(0, 0) = reciprocal[0];
+    if constexpr (N == 2) {
+      inverse(1, 1) = reciprocal[1];
+      inverse(1, 0) = -(l(1, 0) * reciprocal[0]) * reciprocal[1];
     }
+  } else {
+    inverse.setIdentity();
+    int first[N];
+    for (int c = 0; c < N; ++c) first[c] = c & ~1;  // even, as the kernel's pairs of rows need
+    solve_lower_in_place(l, reciprocal, inverse, first);
   }
-  // The squares summed afterwards, in squared_norm's independent chains (the upper triangle adds
-  // zeros), rather than as one chain through the substitution.
-  return squared_norm(z, N * N);
+  return squared_norm(inverse.data(), N * N);
 }
 
 /// The same, taking the diagonal's reciprocals itself.
