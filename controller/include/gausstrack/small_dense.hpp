@@ -44,17 +44,12 @@ inline constexpr bool kHasIeeeBits = !std::is_void_v<IeeeBits<Scalar>>;
 template <typename Scalar>
 bool all_finite(const Scalar* x, int count, Scalar* copy = nullptr) noexcept {
   if (!detail::kHasIeeeBits<Scalar> || count < 16) {
-    if (copy != nullptr) {
-      bool finite = true;
-      for (int i = 0; i < count; ++i) {
-        copy[i] = x[i];
-        finite = finite && std::isfinite(x[i]);
-      }
-      return finite;
+    bool finite = true;
+    for (int i = 0; i < count && (finite || copy != nullptr); ++i) {
+      if (copy != nullptr) copy[i] = x[i];
+      finite = finite && std::isfinite(x[i]);
     }
-    for (int i = 0; i < count; ++i)
-      if (!std::isfinite(x[i])) return false;
-    return true;
+    return finite;
   }
   if constexpr (detail::kHasIeeeBits<Scalar>) {
     using Bits = detail::IeeeBits<Scalar>;
@@ -63,19 +58,11 @@ bool all_finite(const Scalar* x, int count, Scalar* copy = nullptr) noexcept {
     constexpr Bits kLowest = Bits(1) << kMantissa;
     constexpr Bits kSign = Bits(1) << (sizeof(Scalar) * 8 - 1);
     Bits carried = 0;
-    if (copy != nullptr) {
-      for (int i = 0; i < count; ++i) {
-        Bits b;
-        std::memcpy(&b, x + i, sizeof b);
-        std::memcpy(copy + i, &b, sizeof b);
-        carried |= (b & kExponent) + kLowest;
-      }
-    } else {
-      for (int i = 0; i < count; ++i) {
-        Bits b;
-        std::memcpy(&b, x + i, sizeof b);
-        carried |= (b & kExponent) + kLowest;
-      }
+    for (int i = 0; i < count; ++i) {  // the test on `copy` is hoisted out of the loop
+      Bits b;
+      std::memcpy(&b, x + i, sizeof b);
+      if (copy != nullptr) std::memcpy(copy + i, &b, sizeof b);
+      carried |= (b & kExponent) + kLowest;
     }
     return (carried & kSign) == 0;
   }
