@@ -1,11 +1,12 @@
 // Every message decoder and validator on hostile bytes: the generated decoders of the three
 // fixed-size message types, the checked decoder of loop statistics (decode_loop_stats), the
 // codec's state and command validation at any dimension, the controller node's handling of a
-// state (serve, repeat or refuse) and the plant node's handling of a command.
+// state (serve, repeat, supersede or refuse) and the plant node's handling of a command.
 //
 // Properties (any violation aborts, so libFuzzer keeps the input):
 // - a decoded state or command that the codec accepts has finite values and its dimension;
-// - the controller node accounts for every datagram (served + repeated + rejected), and every
+// - the controller node accounts for every datagram (served + repeated + superseded + rejected),
+//   whether it answers each at once or takes several before answering the newest, and every
 //   command it publishes decodes, answers that run with a finite force, and is zero when failed;
 // - the plant node accounts for every command (kept or refused, never applied twice);
 // - with the pair's key the nodes account for authentication refusals too, and datagrams the
@@ -105,16 +106,21 @@ void codec_case(std::uint8_t dimension, const std::uint8_t* data, std::size_t si
   }
 }
 
-// The length of the next datagram: two bytes (little endian), at most what is left.
-std::size_t next_length(FuzzInput& in) {
+// The length of the next datagram: two bytes (little endian), at most what is left. The top bit
+// is not part of it: `flag` (the controller node in batches: answer after this datagram).
+std::size_t next_length(FuzzInput& in, bool* flag = nullptr) {
   std::size_t n = in.byte();
   n |= static_cast<std::size_t>(in.byte()) << 8;
+  if (flag) *flag = (n & 0x8000) != 0;
+  n &= 0x7fff;
   return n < in.rest_size() ? n : in.rest_size();
 }
 
 // A sequence of datagrams for one controller node: each is its length and that many bytes.
-// With the pair's key: each datagram is sealed with it or not, as its flag byte says.
-void controller_case(FuzzInput& in, bool authenticated) {
+// With the pair's key: each datagram is sealed with it or not, as its flag byte says. In batches
+// (as serve() takes what is queued): each datagram is taken, and the newest state answered after
+// a datagram whose length has its top bit set, and at the end.
+void controller_case(FuzzInput& in, bool authenticated, bool batches) {
   Harness& h = harness();
   gn::ControllerNode<Duffing> node(gausstrack::TrackingController<Duffing>{}, h.commands, nullptr,
                                    16);
@@ -126,7 +132,8 @@ void controller_case(FuzzInput& in, bool authenticated) {
   long datagrams = 0;
   while (in.rest_size() > 0) {
     const bool seal_this = authenticated && (in.byte() & 1) != 0;
-    std::size_t n = next_length(in);
+    bool answer_now = false;
+    std::size_t n = next_length(in, &answer_now);
     const std::uint8_t* bytes = in.rest();
     for (std::size_t i = 0; i < n; ++i) in.byte();
     if (seal_this && n + gn::kTrailerBytes <= sealed.size()) {
@@ -136,12 +143,19 @@ void controller_case(FuzzInput& in, bool authenticated) {
       bytes = sealed.data();
       n = static_cast<std::size_t>(m);
     }
-    node.handle(bytes, n);
+    if (!batches) {
+      node.handle(bytes, n);
+    } else {
+      node.receive(bytes, n);
+      if (answer_now) node.answer();
+    }
     ++datagrams;
   }
+  node.answer();
   h.drain();
   const gn::ControllerCounts& c = node.counts();
-  GAUSSTRACK_FUZZ_CHECK(c.served + c.repeated + c.rejected == datagrams);
+  GAUSSTRACK_FUZZ_CHECK(c.served + c.repeated + c.superseded + c.rejected == datagrams);
+  if (!batches) GAUSSTRACK_FUZZ_CHECK(c.superseded == 0);
   GAUSSTRACK_FUZZ_CHECK(c.rejected ==
                         c.malformed + c.wrong_dimension + c.non_finite + c.stale + c.auth.total());
   if (!authenticated) GAUSSTRACK_FUZZ_CHECK(c.auth.total() == 0);
@@ -204,10 +218,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       break;
     }
     case 5:
-      controller_case(in, false);
+      controller_case(in, false, (selector & 16) != 0);
       break;
     case 6:
-      controller_case(in, true);
+      controller_case(in, true, (selector & 16) != 0);
       break;
     default:
       plant_case(in, (selector & 8) != 0);

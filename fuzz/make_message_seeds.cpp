@@ -59,9 +59,10 @@ Bytes with_selector(std::uint8_t selector, const Bytes& payload, std::vector<std
   return b;
 }
 
-void append_datagram(Bytes& b, const Bytes& datagram) {
+// `answer`: the controller node in batches answers after this datagram (the length's top bit).
+void append_datagram(Bytes& b, const Bytes& datagram, bool answer = false) {
   b.push_back(static_cast<std::uint8_t>(datagram.size() & 0xff));
-  b.push_back(static_cast<std::uint8_t>(datagram.size() >> 8));
+  b.push_back(static_cast<std::uint8_t>((datagram.size() >> 8) | (answer ? 0x80 : 0)));
   b.insert(b.end(), datagram.begin(), datagram.end());
 }
 
@@ -99,6 +100,17 @@ int main(int argc, char** argv) {
                         state(2, 9, 1, 0.0), state(2, 7, 5, 0.005), state(3, 9, 2, 0.001)})
     append_datagram(controller, encode(s));
   write(dir, "controller_sequence", controller);
+  // The same node taking states in batches: three queued (the newest answered), a stale one, the
+  // newest again, a restarted plant's state superseding its ended run's.
+  Bytes batches{5 | 16};
+  append_datagram(batches, encode(state(2, 7, 1, 0.0)));
+  append_datagram(batches, encode(state(2, 7, 2, 0.001)));
+  append_datagram(batches, encode(state(2, 7, 3, 0.002)), true);
+  append_datagram(batches, encode(state(2, 7, 2, 0.001)));
+  append_datagram(batches, encode(state(2, 7, 3, 0.002)));
+  append_datagram(batches, encode(state(2, 7, 4, 0.003)));
+  append_datagram(batches, encode(state(2, 9, 0, 0.0)));
+  write(dir, "controller_batches", batches);
 
   // The plant node (run 42, dimension 2): commands of its run, of another run, a failed one.
   Bytes plant{7, 1};

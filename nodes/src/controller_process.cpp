@@ -24,7 +24,8 @@ void write_controller_stats(const std::string& path, const std::string& model, c
   const nlohmann::ordered_json j = {
       {"process", "controller"},        {"model", model},
       {"commands_published", c.served}, {"commands_failed", c.failed},
-      {"commands_repeated", c.repeated}, {"runs", c.runs},
+      {"commands_repeated", c.repeated}, {"states_superseded", c.superseded},
+      {"runs", c.runs},
       {"messages_rejected", c.rejected}, {"rejected_malformed", c.malformed},
       {"rejected_dimension", c.wrong_dimension}, {"rejected_non_finite", c.non_finite},
       {"rejected_stale", c.stale},      {"rejected_unauthenticated", c.auth.unauthenticated},

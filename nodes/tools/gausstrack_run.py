@@ -180,6 +180,7 @@ def merged_summary(args, out, plant_status, controller_status):
         "messages_rejected_by_controller": controller_rejected,
         "log_dropped": summary.get("log_dropped", 0) + ctrl.get("log_dropped", 0),
         "commands_published": ctrl.get("commands_published", 0),
+        "states_superseded": ctrl.get("states_superseded", 0),
         "compute_ns_at_plant": summary.get("compute_ns"),
         "compute_ns": ctrl.get("compute_ns", summary.get("compute_ns")),
         "lcm_url": args.lcm_url or os.environ.get("LCM_DEFAULT_URL", "(LCM default)"),
@@ -202,7 +203,8 @@ def print_summary(args, scene_name, mode, summary, summary_path):
   round trip [us]     p50 {rt['p50']:.1f}  p99 {rt['p99']:.1f}  p99.9 {rt['p999']:.1f}  max {rt['max']:.1f}
   compute [ns]        p50 {cp['p50']:.0f}  p99 {cp['p99']:.0f}  max {cp['max']:.0f}
   wake-up late [us]   p99 {wl.get('p99', 0):.1f}  max {wl.get('max', 0):.1f}
-  states published    {summary['states_published']}
+  states published    {summary['states_published']} ({summary['states_superseded']} superseded at the controller \
+by a newer one before it answered)
   commands applied    {summary['commands_applied']} (missing {summary['commands_missing']}, \
 late {summary['commands_late']})
   deadline misses     {summary['deadline_misses']}

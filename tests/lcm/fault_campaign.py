@@ -255,9 +255,10 @@ def check(expect, s, errors, ctrl):
         if not lo <= frac <= hi:
             problems.append(f"missing fraction {frac:.3f} not in [{lo:.3f}, {hi:.3f}]")
     if "rejected_min" in expect:
-        rejected = s["messages_rejected"] + sum(c["messages_rejected"] + c.get("commands_repeated", 0) for c in ctrl)
+        rejected = s["messages_rejected"] + sum(c["messages_rejected"] + c.get("commands_repeated", 0) + c.get("states_superseded", 0)
+                                                for c in ctrl)
         if rejected < expect["rejected_min"]:
-            problems.append(f"only {rejected} duplicates refused or answered again")
+            problems.append(f"only {rejected} duplicates refused, superseded or answered again")
     if "controller_runs" in expect and ctrl and ctrl[0]["runs"] != expect["controller_runs"]:
         problems.append(f"controller saw {ctrl[0]['runs']} runs")
     return problems

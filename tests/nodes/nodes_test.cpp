@@ -383,6 +383,86 @@ TEST_F(ControllerFixture, RestartedPlantIsANewRunNotStaleStates) {
   EXPECT_EQ(node.counts().runs, 2);
 }
 
+// A controller that fell behind answers the plant's present state, not the queue: serve() takes
+// every state queued and answers only the newest, with the law's force at that state.
+TEST_F(ControllerFixture, ServeAnswersOnlyTheNewestQueuedState) {
+  Duffing m;
+  m.k1 = 11.0;
+  m.trajectory.alpha = 0.4;
+  const auto publish = [&](const std::vector<std::uint8_t>& bytes) {
+    lcm.publish("STATE", bytes.data(), static_cast<unsigned>(bytes.size()));
+  };
+  std::vector<Eigen::Vector2d> qs;
+  for (int k = 0; k < 5; ++k) {
+    qs.emplace_back(0.1 * k + 0.05, -0.2 * k);
+    publish(encode_state(2, 3, k, 0.01 * k, {qs[k](0), qs[k](1)}, {0.3, 0.1 * k}));
+  }
+  publish(encode_state(2, 3, 4, 0.04, {qs[4](0), qs[4](1)}, {0.3, 0.4}));  // the newest again
+  EXPECT_GT(node.serve(lcm, 0), 0);
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(out.commands.size(), 1u);
+  EXPECT_EQ(out.commands[0].state_sequence, 4);
+  const Eigen::Vector2d expected = duffing_force_by_hand(m, qs[4], Eigen::Vector2d(0.3, 0.4), 0.04);
+  EXPECT_NEAR(out.commands[0].force[0], expected(0), 1e-10 * (1 + expected.norm()));
+  EXPECT_NEAR(out.commands[0].force[1], expected(1), 1e-10 * (1 + expected.norm()));
+  EXPECT_EQ(node.counts().served, 1);
+  EXPECT_EQ(node.counts().superseded, 5);
+  EXPECT_EQ(node.compute_ns().count(), 1u);
+
+  // A state alone is answered as before, and an older one queued behind a newer is refused.
+  publish(encode_state(2, 3, 6, 0.06, {0.2, 0.1}, {0, 0}));
+  publish(encode_state(2, 3, 5, 0.05, {0.2, 0.1}, {0, 0}));
+  node.serve(lcm, 0);
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(out.commands.size(), 2u);
+  EXPECT_EQ(out.commands[1].state_sequence, 6);
+  EXPECT_EQ(node.counts().stale, 1);
+  EXPECT_EQ(node.counts().superseded, 5);
+  // Nothing queued: nothing answered, nothing counted.
+  EXPECT_EQ(node.serve(lcm, 0), 0);
+  EXPECT_EQ(node.counts().served, 2);
+}
+
+// Refused datagrams queued behind a good state leave that state to be answered intact; a
+// restarted plant's state supersedes the ended run's.
+TEST_F(ControllerFixture, RefusedStatesInAQueueLeaveTheNewestGoodOneIntact) {
+  const auto publish = [&](const std::vector<std::uint8_t>& bytes) {
+    lcm.publish("STATE", bytes.data(), static_cast<unsigned>(bytes.size()));
+  };
+  Duffing m;
+  m.k1 = 11.0;
+  m.trajectory.alpha = 0.4;
+  const Eigen::Vector2d q(0.7, -0.3), qd(0.2, 0.9);
+  publish(encode_state(2, 8, 7, 0.2, {q(0), q(1)}, {qd(0), qd(1)}));
+  publish(encode_state(2, 8, 8, 0.3, {kNaN, 5.0}, {1, 1}));   // non-finite
+  publish(encode_state(3, 8, 9, 0.3, {4, 4, 4}, {1, 1, 1}));  // another dimension
+  auto truncated = encode_state(2, 8, 10, 0.3, {6, 6}, {1, 1});
+  truncated.resize(truncated.size() - 9);
+  publish(truncated);
+  node.serve(lcm, 0);
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(out.commands.size(), 1u);
+  EXPECT_EQ(out.commands[0].state_sequence, 7);
+  const Eigen::Vector2d expected = duffing_force_by_hand(m, q, qd, 0.2);
+  EXPECT_NEAR(out.commands[0].force[0], expected(0), 1e-10 * (1 + expected.norm()));
+  EXPECT_EQ(node.counts().rejected, 3);
+  EXPECT_EQ(node.counts().superseded, 0);
+
+  publish(encode_state(2, 8, 11, 0.4, {0.1, 0}, {0, 0}));
+  publish(encode_state(2, 9, 0, 0.0, {0.1, 0}, {0, 0}));  // the plant restarted
+  node.serve(lcm, 0);
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(out.commands.size(), 2u);
+  EXPECT_EQ(out.commands[1].run_id, 9);
+  EXPECT_EQ(out.commands[1].state_sequence, 0);
+  EXPECT_EQ(node.counts().superseded, 1);
+  EXPECT_EQ(node.counts().runs, 2);
+}
+
 TEST_F(ControllerFixture, DiagnosticsTravelApartAndAddUpToTheForce) {
   Outbox diag_out(lcm, "DIAG", nullptr, false);
   ControllerNode<Duffing> with_diag(plant_sim::make_controller<Duffing>(duffing_spec()), commands,

@@ -1,12 +1,12 @@
 // ControllerNode<Model>: the controller process's work, for any model. Subscribe it to the
-// plant's states; for each state it validates, computes the control law and publishes the
-// command at once:
+// plant's states and let it serve them; for each state it validates, computes the control law and
+// publishes the command:
 //
 //   lcm::LCM lcm;
 //   Outbox commands(lcm, "GAUSSTRACK_COMMAND", nullptr, false);
 //   ControllerNode<MyModel> node(make_controller<MyModel>(spec), commands);
 //   lcm.subscribe("GAUSSTRACK_STATE", &ControllerNode<MyModel>::on_state, &node);
-//   while (!g_stop_requested) lcm.handleTimeout(100);
+//   while (!g_stop_requested) node.serve(lcm, 100);
 //
 // Wire contract:
 // - With the pair's key (authenticate()), a state whose trailer does not verify (none, another
@@ -15,11 +15,16 @@
 // - A state that does not decode, has another dimension or a non-finite value is counted and
 //   dropped; so is one of the current plant run whose sequence is older than the last, and one
 //   of a run that has ended (a late datagram of a plant that restarted).
+// - Only the newest state is answered: serve() takes every state already queued and answers the
+//   newest; the older ones are superseded (counted, not answered). A controller that fell behind
+//   (the machine stalled it) answers the plant's present state next instead of working through
+//   states whose answers would come too late to be applied. A state dispatched by other means
+//   (on_state outside serve(), handle()) is answered at once.
 // - The last state repeated (a plant in lock-step asking again after a lost message) is
 //   answered again with the same command, not recomputed.
 // - A state with a new run_id is a new plant run (a restarted plant): its sequence starts again
 //   and it is served.
-// - Every served state gets one command: the force, or all zeros with the status of a failed
+// - Every answered state gets one command: the force, or all zeros with the status of a failed
 //   solve, which the plant applies as zero (never the previous force).
 // - The force's parts and the solve's figures go to the diagnostics outbox, if one is given.
 // The path from receipt to publish allocates nothing.
@@ -47,6 +52,7 @@ namespace gausstrack::nodes {
 struct ControllerCounts {
   long served = 0;    ///< states answered with a command
   long repeated = 0;  ///< repeated states answered again with the same command
+  long superseded = 0;  ///< states not answered: a newer one (or the same again) was queued behind them
   long failed = 0;    ///< commands reporting a failed solve (force zero)
   long rejected = 0;  ///< states refused (any reason below)
   long malformed = 0, wrong_dimension = 0, non_finite = 0, stale = 0;
@@ -82,40 +88,87 @@ class ControllerNode {
   /// authentication, which must outlive the node).
   void authenticate(ChannelAuth& states) noexcept { auth_ = &states; }
 
-  /// LCM subscription handler.
+  /// LCM subscription handler: inside serve() it takes the state for serve() to answer, outside
+  /// it answers the state at once (handle()).
   void on_state(const lcm::ReceiveBuffer* rbuf, const std::string&) noexcept {
-    handle(rbuf->data, rbuf->data_size);
+    if (serving_) receive(rbuf->data, rbuf->data_size);
+    else handle(rbuf->data, rbuf->data_size);
+  }
+
+  /// Waits up to `timeout_ms` for a message on `lcm`, takes every message already queued behind
+  /// it (at most kMaxBatch) and answers the newest state among them. Returns what
+  /// lcm.handleTimeout returned for the first message (< 0: LCM failed).
+  int serve(lcm::LCM& lcm, int timeout_ms) noexcept {
+    serving_ = true;
+    const int first = lcm.handleTimeout(timeout_ms);
+    for (int i = 0; first > 0 && i < kMaxBatch && lcm.handleTimeout(0) > 0; ++i) {
+    }
+    serving_ = false;
+    answer();
+    return first;
   }
 
   /// Validates one encoded plant state and, if it is served, publishes the command.
   void handle(const void* data, std::size_t size) noexcept {
+    receive(data, size);
+    answer();
+  }
+
+  /// Validates one encoded plant state and keeps it as the one to answer (a newer state replaces
+  /// it). A repeat of the last answered state is answered again at once.
+  void receive(const void* data, std::size_t size) noexcept {
     if (!admit(auth_, data, size, counts_.auth)) {
       ++counts_.rejected;
       return;
     }
-    const Refusal r = codec_.decode_state(data, size, state_, q_, qd_);
+    const Refusal r = codec_.decode_state(data, size, incoming_, incoming_q_, incoming_qd_);
     if (r != Refusal::kNone)
       return refuse(r == Refusal::kMalformed   ? counts_.malformed
                     : r == Refusal::kDimension ? counts_.wrong_dimension
                                                : counts_.non_finite);
-    if (state_.sequence < 0) return refuse(counts_.stale);
-    if (state_.run_id != run_id_ || counts_.runs == 0) {
+    if (incoming_.sequence < 0) return refuse(counts_.stale);
+    if (incoming_.run_id != run_id_ || counts_.runs == 0) {
       for (std::int64_t ended : ended_runs_)
-        if (ended == state_.run_id) return refuse(counts_.stale);
+        if (ended == incoming_.run_id) return refuse(counts_.stale);
       if (counts_.runs > 0)
         ended_runs_[static_cast<std::size_t>(counts_.runs) % ended_runs_.size()] = run_id_;
-      run_id_ = state_.run_id;
+      run_id_ = incoming_.run_id;
       last_sequence_ = -1;
       ++counts_.runs;
+      if (pending_) ++counts_.superseded;  // the ended run's state, never answered
+      pending_ = false;
     }
-    if (state_.sequence == last_sequence_ && last_bytes_ > 0) {
-      ++counts_.repeated;
-      commands_.publish(last_command_.data(), static_cast<std::size_t>(last_bytes_), wall_us());
-      return;
+    if (incoming_.sequence == last_sequence_) {
+      if (pending_) {  // the same state again, not yet answered: answered once
+        ++counts_.superseded;
+        return;
+      }
+      if (last_bytes_ > 0) {
+        ++counts_.repeated;
+        commands_.publish(last_command_.data(), static_cast<std::size_t>(last_bytes_), wall_us());
+        return;
+      }
     }
-    if (state_.sequence < last_sequence_) return refuse(counts_.stale);
-    last_sequence_ = state_.sequence;
+    if (incoming_.sequence < last_sequence_) return refuse(counts_.stale);
+    if (pending_) ++counts_.superseded;
+    last_sequence_ = incoming_.sequence;
+    state_ = incoming_;
+    q_ = incoming_q_;
+    qd_ = incoming_qd_;
+    pending_ = true;
+  }
 
+  const ControllerCounts& counts() const noexcept { return counts_; }
+  const LatencyRecorder& compute_ns() const noexcept { return compute_ns_; }
+  Controller& controller() noexcept { return controller_; }
+
+  /// The most messages one serve() takes off the queue behind the first.
+  static constexpr int kMaxBatch = 256;
+
+  /// Computes and publishes the command for the state receive() kept, if one waits.
+  void answer() noexcept {
+    if (!pending_) return;
+    pending_ = false;
     if (measured_delay_ && controller_.hold().period > 0) {
       // The hold's delay as the plant measured it: the law is evaluated for when its force acts.
       Hold<Scalar> hold = controller_.hold();
@@ -161,10 +214,6 @@ class ControllerNode {
     }
   }
 
-  const ControllerCounts& counts() const noexcept { return counts_; }
-  const LatencyRecorder& compute_ns() const noexcept { return compute_ns_; }
-  Controller& controller() noexcept { return controller_; }
-
  private:
   void refuse(long& reason) noexcept {
     ++reason;
@@ -177,10 +226,12 @@ class ControllerNode {
   Outbox& commands_;
   Outbox* diagnostics_;
   ChannelAuth* auth_ = nullptr;
-  plant_state_t state_{};
+  plant_state_t state_{}, incoming_{};  ///< the state to answer; the one being read
   control_command_t command_{};
   control_diagnostics_t diag_{};
-  typename Codec<N>::Vector q_, qd_;
+  typename Codec<N>::Vector q_, qd_, incoming_q_, incoming_qd_;
+  bool pending_ = false;  ///< state_ waits for its answer
+  bool serving_ = false;  ///< inside serve(): on_state only takes states
   std::array<std::uint8_t, kMessageBufferBytes> buffer_{}, last_command_{};
   int last_bytes_ = 0;
   bool measured_delay_ = true;

@@ -63,7 +63,7 @@ int run_controller(const ControllerProcessOptions& o, const tracking::TrackingSp
   std::printf("gausstrack-controller: ready (%s, %d coordinates, %d constraint rows, %s)\n", spec.model.c_str(),
               M::kDof, M::kConstraints, auth.enabled() ? "authenticated" : "unauthenticated");
   std::fflush(stdout);
-  while (!g_stop_requested) lcm.handleTimeout(100);
+  while (!g_stop_requested) node.serve(lcm, 100);
 
   const ControllerCounts& c = node.counts();
   loop_stats_t stats{};
@@ -85,9 +85,9 @@ int run_controller(const ControllerProcessOptions& o, const tracking::TrackingSp
       return std::fprintf(stderr, "error: %s\n", e.what()), 1;
     }
   }
-  std::printf("gausstrack-controller: %ld commands published (%ld failed solves), %ld plant runs, %ld messages "
-              "rejected, compute p50 %.0f ns, p99 %.0f ns, max %.0f ns\n",
-              c.served, c.failed, c.runs, c.rejected, stats.compute_ns_p50, stats.compute_ns_p99, stats.compute_ns_max);
+  std::printf("gausstrack-controller: %ld commands published (%ld failed solves), %ld states superseded by a "
+              "newer one, %ld plant runs, %ld messages rejected, compute p50 %.0f ns, p99 %.0f ns, max %.0f ns\n",
+              c.served, c.failed, c.superseded, c.runs, c.rejected, stats.compute_ns_p50, stats.compute_ns_p99, stats.compute_ns_max);
   if (c.auth.total() > 0)
     std::printf("gausstrack-controller: %ld states failed authentication (%ld with another key or altered, %ld "
                 "without a key, %ld replayed)%s\n", c.auth.total(), c.auth.bad_tag, c.auth.unauthenticated,
