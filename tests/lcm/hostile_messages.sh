@@ -15,4 +15,4 @@ sleep 0.3
 kill -TERM $controller
 wait $controller
 cat "$work/controller.log"
-grep -q "1 commands published (0 failed solves), 1 plant runs, 6 messages rejected" "$work/controller.log"
+grep -q "1 commands published (0 failed solves), 0 states superseded by a newer one, 1 plant runs, 6 messages rejected" "$work/controller.log"
