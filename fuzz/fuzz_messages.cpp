@@ -5,9 +5,9 @@
 //
 // Properties (any violation aborts, so libFuzzer keeps the input):
 // - a decoded state or command that the codec accepts has finite values and its dimension;
-// - the controller node accounts for every datagram (served + repeated + superseded + rejected),
-//   whether it answers each at once or takes several before answering the newest, and every
-//   command it publishes decodes, answers that run with a finite force, and is zero when failed;
+// - the controller node accounts for every datagram (served + repeated + duplicates + superseded
+//   + rejected), whether it answers each at once or takes several before answering the newest,
+//   and every command it publishes decodes, answers that run with a finite force, and is zero when failed;
 // - the plant node accounts for every command (kept or refused, never applied twice);
 // - with the pair's key the nodes account for authentication refusals too, and datagrams the
 //   harness seals with that key reach the checks behind the authentication.
@@ -154,8 +154,8 @@ void controller_case(FuzzInput& in, bool authenticated, bool batches) {
   node.answer();
   h.drain();
   const gn::ControllerCounts& c = node.counts();
-  GAUSSTRACK_FUZZ_CHECK(c.served + c.repeated + c.superseded + c.rejected == datagrams);
-  if (!batches) GAUSSTRACK_FUZZ_CHECK(c.superseded == 0);
+  GAUSSTRACK_FUZZ_CHECK(c.served + c.repeated + c.duplicates + c.superseded + c.rejected == datagrams);
+  if (!batches) GAUSSTRACK_FUZZ_CHECK(c.superseded == 0 && c.duplicates == 0);
   GAUSSTRACK_FUZZ_CHECK(c.rejected ==
                         c.malformed + c.wrong_dimension + c.non_finite + c.stale + c.auth.total());
   if (!authenticated) GAUSSTRACK_FUZZ_CHECK(c.auth.total() == 0);

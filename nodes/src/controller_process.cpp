@@ -25,6 +25,7 @@ void write_controller_stats(const std::string& path, const std::string& model, c
       {"process", "controller"},        {"model", model},
       {"commands_published", c.served}, {"commands_failed", c.failed},
       {"commands_repeated", c.repeated}, {"states_superseded", c.superseded},
+      {"states_duplicated", c.duplicates},
       {"runs", c.runs},
       {"messages_rejected", c.rejected}, {"rejected_malformed", c.malformed},
       {"rejected_dimension", c.wrong_dimension}, {"rejected_non_finite", c.non_finite},

@@ -407,8 +407,23 @@ TEST_F(ControllerFixture, ServeAnswersOnlyTheNewestQueuedState) {
   EXPECT_NEAR(out.commands[0].force[0], expected(0), 1e-10 * (1 + expected.norm()));
   EXPECT_NEAR(out.commands[0].force[1], expected(1), 1e-10 * (1 + expected.norm()));
   EXPECT_EQ(node.counts().served, 1);
-  EXPECT_EQ(node.counts().superseded, 5);
+  EXPECT_EQ(node.counts().superseded, 4);
+  EXPECT_EQ(node.counts().duplicates, 1);
   EXPECT_EQ(node.compute_ns().count(), 1u);
+
+  // The answered state again (a lock-step plant asking after a lost answer): the same command,
+  // not recomputed.
+  publish(encode_state(2, 3, 4, 0.04, {qs[4](0), qs[4](1)}, {0.3, 0.4}));
+  node.serve(lcm, 0);
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(out.commands.size(), 2u);
+  EXPECT_EQ(out.commands[1].sequence, out.commands[0].sequence);
+  EXPECT_EQ(out.commands[1].force[0], out.commands[0].force[0]);
+  EXPECT_EQ(out.commands[1].force[1], out.commands[0].force[1]);
+  EXPECT_EQ(node.counts().repeated, 1);
+  EXPECT_EQ(node.compute_ns().count(), 1u);
+  out.commands.erase(out.commands.begin() + 1);
 
   // A state alone is answered as before, and an older one queued behind a newer is refused.
   publish(encode_state(2, 3, 6, 0.06, {0.2, 0.1}, {0, 0}));
@@ -419,7 +434,7 @@ TEST_F(ControllerFixture, ServeAnswersOnlyTheNewestQueuedState) {
   ASSERT_EQ(out.commands.size(), 2u);
   EXPECT_EQ(out.commands[1].state_sequence, 6);
   EXPECT_EQ(node.counts().stale, 1);
-  EXPECT_EQ(node.counts().superseded, 5);
+  EXPECT_EQ(node.counts().superseded, 4);
   // Nothing queued: nothing answered, nothing counted.
   EXPECT_EQ(node.serve(lcm, 0), 0);
   EXPECT_EQ(node.counts().served, 2);
@@ -448,6 +463,7 @@ TEST_F(ControllerFixture, RefusedStatesInAQueueLeaveTheNewestGoodOneIntact) {
   EXPECT_EQ(out.commands[0].state_sequence, 7);
   const Eigen::Vector2d expected = duffing_force_by_hand(m, q, qd, 0.2);
   EXPECT_NEAR(out.commands[0].force[0], expected(0), 1e-10 * (1 + expected.norm()));
+  EXPECT_NEAR(out.commands[0].force[1], expected(1), 1e-10 * (1 + expected.norm()));
   EXPECT_EQ(node.counts().rejected, 3);
   EXPECT_EQ(node.counts().superseded, 0);
 

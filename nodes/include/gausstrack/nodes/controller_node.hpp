@@ -18,12 +18,15 @@
 // - Only the newest state is answered: serve() takes every state already queued and answers the
 //   newest; the older ones are superseded (counted, not answered). A controller that fell behind
 //   (the machine stalled it) answers the plant's present state next instead of working through
-//   states whose answers would come too late to be applied. A state dispatched by other means
-//   (on_state outside serve(), handle()) is answered at once.
+//   a queue of old ones. (A plant applying answers a lag of L > 1 periods after their states
+//   could still have used the answers to the L - 1 states before the newest; it holds its
+//   previous answer for those periods.) A state dispatched by other means (on_state outside
+//   serve(), handle()) is answered at once.
 // - The last state repeated (a plant in lock-step asking again after a lost message) is
-//   answered again with the same command, not recomputed.
+//   answered again with the same command, not recomputed; the same state twice before its answer
+//   (a duplicated datagram) is answered once.
 // - A state with a new run_id is a new plant run (a restarted plant): its sequence starts again
-//   and it is served.
+//   and its states are taken like any other (the ended run's waiting state is superseded).
 // - Every answered state gets one command: the force, or all zeros with the status of a failed
 //   solve, which the plant applies as zero (never the previous force).
 // - The force's parts and the solve's figures go to the diagnostics outbox, if one is given.
@@ -52,7 +55,8 @@ namespace gausstrack::nodes {
 struct ControllerCounts {
   long served = 0;    ///< states answered with a command
   long repeated = 0;  ///< repeated states answered again with the same command
-  long superseded = 0;  ///< states not answered: a newer one (or the same again) was queued behind them
+  long superseded = 0;  ///< states not answered: a newer one was queued behind them
+  long duplicates = 0;  ///< states that came again before their answer (answered once)
   long failed = 0;    ///< commands reporting a failed solve (force zero)
   long rejected = 0;  ///< states refused (any reason below)
   long malformed = 0, wrong_dimension = 0, non_finite = 0, stale = 0;
@@ -140,7 +144,7 @@ class ControllerNode {
     }
     if (incoming_.sequence == last_sequence_) {
       if (pending_) {  // the same state again, not yet answered: answered once
-        ++counts_.superseded;
+        ++counts_.duplicates;
         return;
       }
       if (last_bytes_ > 0) {
@@ -163,7 +167,7 @@ class ControllerNode {
   Controller& controller() noexcept { return controller_; }
 
   /// The most messages one serve() takes off the queue behind the first.
-  static constexpr int kMaxBatch = 256;
+  static constexpr int kMaxBatch = 64;
 
   /// Computes and publishes the command for the state receive() kept, if one waits.
   void answer() noexcept {
