@@ -187,6 +187,7 @@ def measure(bin_dir, scene, out, rate, sched, hog, seconds, sets=()):
         "loop_us": quantiles(s, "round_trip_us"), "loop_wake_us": quantiles(s, "wake_late_us"),
         "loop_misses": s.get("deadline_misses"), "loop_periods": loop_periods,
         "loop_missing": s.get("commands_missing"), "loop_max_error": s.get("max_tracking_error"),
+        "loop_answered": s.get("commands_published"), "loop_superseded": s.get("states_superseded"),
         "loop_ksoftirqd_ms": softirq_after[0] - softirq_before[0], "loop_net_rx": softirq_after[1] - softirq_before[1],
         "loop_threads": threads,
     }
@@ -228,9 +229,12 @@ def report(rows, out, seconds, scene="", sets=()):
               "writer when a run keeps a log), over the loop's run: CPU time, time runnable but waiting for a CPU (run-queue wait, from "
               "schedstat) and involuntary context switches (preemptions), as ms / ms / count. A tail that the "
               "run-queue wait does not explain is time the thread spent blocked (waiting for a message or a "
-              "lock), not time it was kept off a CPU.", "",
-              "| rate | scheduler | load | loop p99 | plant main | plant other | controller main | controller other |",
-              "|---|---|---|---|---|---|---|---|"]
+              "lock), not time it was kept off a CPU. States answered / superseded: the controller answers "
+              "the newest of the states queued when it gets to them; a controller short of CPU time "
+              "supersedes many.", "",
+              "| rate | scheduler | load | loop p99 | plant main | plant other | controller main | controller other "
+              "| states answered / superseded |",
+              "|---|---|---|---|---|---|---|---|---|"]
 
     def cell(r, role, kind):
         t = (r.get("loop_threads") or {}).get(role, {}).get(kind)
@@ -243,7 +247,8 @@ def report(rows, out, seconds, scene="", sets=()):
             continue
         lines.append(f"| {r['rate_hz']:g} Hz | {r['scheduler']} | {'1 hog' if r['hog'] else 'quiet'} "
                      f"| {r['loop_us']['p99']:.0f} us | {cell(r, 'plant', 'main')} | {cell(r, 'plant', 'other')} "
-                     f"| {cell(r, 'controller', 'main')} | {cell(r, 'controller', 'other')} |")
+                     f"| {cell(r, 'controller', 'main')} | {cell(r, 'controller', 'other')} "
+                     f"| {r.get('loop_answered', '')} / {r.get('loop_superseded', '')} |")
     lines += ["", "## Targets", "", "| target | case | measured | met |", "|---|---|---|---|"]
 
     def target(label, case, text, ok):
@@ -287,7 +292,21 @@ def main(argv):
     p.add_argument("--no-hog", action="store_true")
     p.add_argument("--schedulers", default=",".join(SCHEDULERS), help="of " + ", ".join(SCHEDULERS))
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="passed to gausstrack-run")
+    p.add_argument("--report-only", action="store_true",
+                   help="measure nothing: rewrite OUT/README.md from OUT's rows and the loop runs' summaries")
     a = p.parse_args(argv)
+    if a.report_only:
+        with open(os.path.join(a.out, "loop_vs_floor.json")) as f:
+            rows = json.load(f)
+        for r in rows:
+            path = os.path.join(a.out, f"loop_{r['tag']}", "summary.json")
+            if "error" not in r and os.path.exists(path):
+                with open(path) as f:
+                    s = json.load(f)
+                r.setdefault("loop_answered", s.get("commands_published"))
+                r.setdefault("loop_superseded", s.get("states_superseded"))
+        report(rows, a.out, a.seconds, a.scene, a.set)
+        return 0
     schedulers = a.schedulers.split(",")
     if any(x not in SCHEDULERS for x in schedulers):
         p.error("--schedulers takes a list of " + ", ".join(SCHEDULERS))
