@@ -834,6 +834,30 @@ TEST_F(PlantFixture, RealTimeHoldsTheNewestAnswerAndNeverAFailedOnesPredecessor)
   EXPECT_EQ(node.counts().states_published, 5);
 }
 
+// A flood (more than kFloodPerPeriod datagrams in a period) switches the loop to taking messages
+// as they come until shortly before its deadline; a quiet period switches it back. The answers
+// are applied as without the flood, and every flooding datagram is refused.
+TEST_F(PlantFixture, AFloodIsTakenBeforeTheDeadlineAndTheAnswersStillApply) {
+  PlantNode node(lcm, states, "CMD", 2, options(false));
+  fake.reply = [](const plant_state_t& s, control_command_t& c) { c.force[0] = 10.0 + static_cast<double>(s.sequence); };
+  const std::array<double, 2> q{0, 0}, qd{0, 0};
+  const std::vector<std::uint8_t> garbage(64, 0xab);
+  std::vector<double> applied;
+  std::vector<bool> flooded;
+  for (int k = 0; k < 6; ++k) {
+    if (k == 2)
+      for (int i = 0; i < 20; ++i) lcm.publish("CMD", garbage.data(), static_cast<unsigned>(garbage.size()));
+    std::array<double, 2> u{};
+    ASSERT_TRUE(node.exchange(k, 0.005 * k, q, qd, u));
+    applied.push_back(u[0]);
+    flooded.push_back(node.flooded());
+  }
+  EXPECT_EQ(applied, (std::vector<double>{10.0, 10.0, 11.0, 12.0, 13.0, 14.0}));
+  EXPECT_EQ(flooded, (std::vector<bool>{false, false, true, false, false, false}));
+  EXPECT_EQ(node.counts().rejected, 20);
+  EXPECT_EQ(node.counts().commands_missing, 1);
+}
+
 TEST_F(PlantFixture, RealTimeWatchdogAppliesTheSafeActionThenRecovers) {
   PlantNodeOptions o = options(false);
   o.watchdog_ms = 20;

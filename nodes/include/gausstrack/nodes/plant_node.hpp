@@ -10,7 +10,9 @@
 //   the timeout) and the clock starts when it comes, so that a run does not begin with a period
 //   of no force. The loop wakes once per period, at its deadline (a timed wait per incoming
 //   message would add a timer's wake-up to every period); it takes the messages that have arrived
-//   then, and before sleeping again those that came since, as far as time allows. Round trips are
+//   then, and before sleeping again those that came since, as far as time allows. Under a flood
+//   (more than kFloodPerPeriod messages in the last period) it instead takes messages as they
+//   come until a quarter period before the deadline, so that the work after the wake stays short. Round trips are
 //   measured from the state's publication to the kernel's receive timestamp of the command
 //   (LCM's recv_utime), so when a command is taken off the queue changes no figure. The command
 //   answering state k acts from period k + L (zero-order hold), L the hold lag (HoldLag: one more
@@ -235,6 +237,8 @@ class PlantNode {
 
   /// Messages taken off the socket at a period's deadline before its command is applied.
   static constexpr int kMaxPerPeriod = 64;
+  /// More messages than this in one period (a command is one) is a flood: see the file comment.
+  static constexpr long kFloodPerPeriod = 4;
 
   PlantNode(const PlantNode&) = delete;
   PlantNode& operator=(const PlantNode&) = delete;
@@ -260,10 +264,14 @@ class PlantNode {
     if (!o_.lockstep) {
       // One timed wake-up per period (see the file comment): take what has arrived, sleep until
       // the deadline, take what came meanwhile, apply the answer due and publish the state.
-      take_arrived(scheduler_.deadline(period) - scheduler_.period_ns() / 4);
+      const std::int64_t early = scheduler_.deadline(period) - scheduler_.period_ns() / 4;
+      if (flooded_) service_until(early, [] { return false; });
+      else take_arrived(early);
       const std::int64_t now = scheduler_.wait_for(period);
       for (int i = 0; i < kMaxPerPeriod && lcm_.handleTimeout(0) > 0; ++i) {
       }
+      flooded_ = messages_ - messages_at_wake_ > kFloodPerPeriod;
+      messages_at_wake_ = messages_;
       // The answer due now (to state period - lag), or when it has not come the newest older one
       // not yet applied.
       const int lag = hold_lag_.lag();
@@ -383,6 +391,7 @@ class PlantNode {
   /// newest one answering a published state not yet answered; counts and drops the rest.
   /// `received_ns`: when it arrived, on the wall clock [ns since the Unix epoch].
   void handle_command(const void* data, std::size_t size, std::int64_t received_ns) noexcept {
+    ++messages_;
     if (!admit(auth_, data, size, counts_.auth)) {
       ++counts_.rejected;
       return;
@@ -430,6 +439,8 @@ class PlantNode {
 
   std::int64_t run_id() const noexcept { return run_id_; }
   const PlantCounts& counts() const noexcept { return counts_; }
+  /// The last period brought a flood: the loop takes messages as they come before its deadline.
+  bool flooded() const noexcept { return flooded_; }
   const PeriodScheduler& scheduler() const noexcept { return scheduler_; }
   const Watchdog& watchdog() const noexcept { return watchdog_; }
   const LatencyRecorder& round_trip_us() const noexcept { return round_trip_us_; }
@@ -578,6 +589,8 @@ class PlantNode {
   control_command_t incoming_{};
   Vector incoming_force_, incoming_command_, latest_force_, hold_;  ///< the last three: force, then control
   bool latest_failed_ = false, ready_ = false, exact_ = true, started_ = false;
+  bool flooded_ = false;                      ///< the last period brought a flood (kFloodPerPeriod)
+  long messages_ = 0, messages_at_wake_ = 0;  ///< commands' datagrams taken; their count at the last wake
   std::array<std::uint8_t, kMessageBufferBytes> buffer_{};
   int state_bytes_ = 0;
   std::array<std::int64_t, 4096> published_at_{};  ///< wall clock [ns] each state was sent
