@@ -125,24 +125,26 @@ class ControllerNode {
       ++counts_.rejected;
       return;
     }
-    const Refusal r = codec_.decode_state(data, size, incoming_, incoming_q_, incoming_qd_);
+    // Read into the other slot: a state refused on the way leaves the kept one intact.
+    Slot& in = slots_[1 - kept_];
+    const Refusal r = codec_.decode_state(data, size, in.msg, in.q, in.qd);
     if (r != Refusal::kNone)
       return refuse(r == Refusal::kMalformed   ? counts_.malformed
                     : r == Refusal::kDimension ? counts_.wrong_dimension
                                                : counts_.non_finite);
-    if (incoming_.sequence < 0) return refuse(counts_.stale);
-    if (incoming_.run_id != run_id_ || counts_.runs == 0) {
+    if (in.msg.sequence < 0) return refuse(counts_.stale);
+    if (in.msg.run_id != run_id_ || counts_.runs == 0) {
       for (std::int64_t ended : ended_runs_)
-        if (ended == incoming_.run_id) return refuse(counts_.stale);
+        if (ended == in.msg.run_id) return refuse(counts_.stale);
       if (counts_.runs > 0)
         ended_runs_[static_cast<std::size_t>(counts_.runs) % ended_runs_.size()] = run_id_;
-      run_id_ = incoming_.run_id;
+      run_id_ = in.msg.run_id;
       last_sequence_ = -1;
       ++counts_.runs;
       if (pending_) ++counts_.superseded;  // the ended run's state, never answered
       pending_ = false;
     }
-    if (incoming_.sequence == last_sequence_) {
+    if (in.msg.sequence == last_sequence_) {
       if (pending_) {  // the same state again, not yet answered: answered once
         ++counts_.duplicates;
         return;
@@ -153,12 +155,10 @@ class ControllerNode {
         return;
       }
     }
-    if (incoming_.sequence < last_sequence_) return refuse(counts_.stale);
+    if (in.msg.sequence < last_sequence_) return refuse(counts_.stale);
     if (pending_) ++counts_.superseded;
-    last_sequence_ = incoming_.sequence;
-    state_ = incoming_;
-    q_ = incoming_q_;
-    qd_ = incoming_qd_;
+    last_sequence_ = in.msg.sequence;
+    kept_ = 1 - kept_;
     pending_ = true;
   }
 
@@ -173,22 +173,23 @@ class ControllerNode {
   void answer() noexcept {
     if (!pending_) return;
     pending_ = false;
+    const Slot& kept = slots_[kept_];
     if (measured_delay_ && controller_.hold().period > 0) {
       // The hold's delay as the plant measured it: the law is evaluated for when its force acts.
       Hold<Scalar> hold = controller_.hold();
-      hold.delay = static_cast<Scalar>(static_cast<double>(state_.hold_delay_ns) * 1e-9);
+      hold.delay = static_cast<Scalar>(static_cast<double>(kept.msg.hold_delay_ns) * 1e-9);
       controller_.set_hold(hold);
     }
     const std::int64_t start = monotonic_ns();
-    const Status status = controller_.compute(q_, qd_, state_.t, out_);
+    const Status status = controller_.compute(kept.q, kept.qd, kept.msg.t, out_);
     const std::int64_t compute_ns = monotonic_ns() - start;
     compute_ns_.add(static_cast<double>(compute_ns));
     if (failed(status)) ++counts_.failed;
 
     command_.utime = wall_us();
     command_.sequence = ++counts_.served;
-    command_.run_id = state_.run_id;
-    command_.state_sequence = state_.sequence;
+    command_.run_id = kept.msg.run_id;
+    command_.state_sequence = kept.msg.sequence;
     command_.status = static_cast<std::int32_t>(status);
     command_.warnings = static_cast<std::int32_t>(out_.diagnostics.warnings);
     command_.compute_ns = compute_ns;
@@ -230,11 +231,15 @@ class ControllerNode {
   Outbox& commands_;
   Outbox* diagnostics_;
   ChannelAuth* auth_ = nullptr;
-  plant_state_t state_{}, incoming_{};  ///< the state to answer; the one being read
+  struct Slot {
+    plant_state_t msg{};
+    typename Codec<N>::Vector q, qd;
+  };
+  std::array<Slot, 2> slots_{};  ///< the state kept to answer (slots_[kept_]) and the one being read
+  int kept_ = 0;
   control_command_t command_{};
   control_diagnostics_t diag_{};
-  typename Codec<N>::Vector q_, qd_, incoming_q_, incoming_qd_;
-  bool pending_ = false;  ///< state_ waits for its answer
+  bool pending_ = false;  ///< slots_[kept_] waits for its answer
   bool serving_ = false;  ///< inside serve(): on_state only takes states
   std::array<std::uint8_t, kMessageBufferBytes> buffer_{}, last_command_{};
   int last_bytes_ = 0;
