@@ -9,6 +9,7 @@ usage: report_bench.py DIR [--doc PAGE.md]
          "scripts/bench: end" lines) with the same tables
 """
 import argparse
+import csv
 import json
 import math
 import os
@@ -443,49 +444,98 @@ def transport(d):
         with open(floor) as f:
             body = f.read().split("\n", 1)[1]
         out += ["## The closed loop against the machine's floors (same run)"] + demote(body)
-    fixed = os.path.join(d, "loop_vs_floor_rk4", "README.md")
-    if os.path.exists(fixed):
-        with open(fixed) as f:
-            body = f.read().split("\n", 1)[1]
-        out += ["## The same at 10 kHz with a fixed-step plant (one RK4 step per period)",
-                "", "What a user running a plant in real time would choose: the Duffing scene with "
-                "`integrator={method: rk4, step: 1.0e-4}` instead of dopri5 at 1e-10."] + demote(demote(body))
-        out += integration_load(d)
-    chain = os.path.join(d, "loop_vs_floor_chain8", "README.md")
-    if os.path.exists(chain):
-        with open(chain) as f:
-            body = f.read().split("\n", 1)[1]
-        out += ["## The 8-mass chain at 10 kHz", "", "Eight coordinates and four tracked rows, the plant "
-                "integrated by its scene's dopri5 at 1e-10 each period."] + demote(demote(body))
-    return out
+    sections = (("loop_vs_floor_rk4", "## The same at 10 kHz with a fixed-step plant (one RK4 step per period)",
+                 "What a user running a plant in real time would choose: the Duffing scene with "
+                 f"`integrator={FIXED_STEP}` instead of dopri5 at 1e-10."),
+                ("loop_vs_floor_chain8", "## The 8-mass chain at 10 kHz", "Eight coordinates and four tracked rows, "
+                 "the plant integrated by its scene's dopri5 at 1e-10 each period."),
+                ("loop_vs_floor_chain8_rk4", "## The 8-mass chain at 10 kHz with a fixed-step plant (one RK4 step "
+                 "per period)", f"The same scene with `integrator={FIXED_STEP}`."))
+    for name, title, intro in sections:
+        path = os.path.join(d, name, "README.md")
+        if os.path.exists(path):
+            with open(path) as f:
+                body = f.read().split("\n", 1)[1]
+            out += [title, "", intro] + demote(demote(body))
+    return out + demote(integration_load(d))
+
+
+FIXED_STEP = "{method: rk4, step: 1.0e-4}"
+# Scene, its loop runs with the scene's adaptive integrator and with one fixed RK4 step per period.
+LOAD_RUNS = (("duffing_alpha4", "loop_vs_floor", "loop_vs_floor_rk4"),
+             ("duffing_chain8", "loop_vs_floor_chain8", "loop_vs_floor_chain8_rk4"))
 
 
 def integration_load(d):
-    """Whether the plant's integration is the load at 10 kHz: its loop thread's CPU time per period
-    with dopri5 at 1e-10 (the scene's) and with one RK4 step, case by case, from the same run."""
-    runs = {}
-    for name in ("loop_vs_floor", "loop_vs_floor_rk4"):
-        doc = load(os.path.join(d, name), "loop_vs_floor.json")
-        for r in doc or []:
-            if "error" in r or r.get("rate_hz") != 10000:
-                continue
-            main = (r.get("loop_threads") or {}).get("plant", {}).get("main")
-            if main and main.get("threads"):
-                key = (r["scheduler"], "1 hog" if r["hog"] else "quiet")
-                runs.setdefault(key, {})[name] = 1e3 * main["cpu_ms"] / max(r["loop_periods"], 1)
-    rows = [(k, v) for k, v in runs.items() if len(v) == 2]
+    """Whether the plant's integration is the load at 10 kHz, scene by scene: the plant's loop
+    thread's CPU time per period with the scene's dopri5 at 1e-10 and with one RK4 step, the loop's
+    deadline misses and largest tracking error with each, case by case from the same run; and the
+    two integrators' own error offline (accuracy_vs_time's integrators.csv, when the run has it)."""
+    rows = []
+    for scene, adaptive, fixed in LOAD_RUNS:
+        runs = {}
+        for name in (adaptive, fixed):
+            for r in load(os.path.join(d, name), "loop_vs_floor.json") or []:
+                if "error" in r or r.get("rate_hz") != 10000:
+                    continue
+                main = (r.get("loop_threads") or {}).get("plant", {}).get("main")
+                if main and main.get("threads"):
+                    key = (r["scheduler"], "1 hog" if r["hog"] else "quiet")
+                    runs.setdefault(key, {})[name] = r
+        for key, v in runs.items():
+            if len(v) == 2:
+                rows.append((scene, key, v[adaptive], v[fixed]))
     if not rows:
         return []
-    out = ["", "#### Is the plant's integration the load?", "",
+    out = ["# Is the plant's integration the load?", "",
            "The plant's loop thread's CPU time per period at 10 kHz (wake-up, the socket's messages, the "
-           "state's publication, the integration over the period, the sleep), the scene's dopri5 at 1e-10 "
-           "beside one RK4 step; the difference is what the adaptive integration costs per period.", "",
-           "| scheduler | load | dopri5 1e-10 [us per period] | RK4 step [us per period] | difference |",
-           "|---|---|---|---|---|"]
-    for (sched, load_), v in rows:
-        a, b = v["loop_vs_floor"], v["loop_vs_floor_rk4"]
-        out.append(f"| {sched} | {load_} | {a:.1f} | {b:.1f} | {a - b:+.1f} |")
-    return out
+           "state's publication, the integration over the period, the sleep), with the scene's dopri5 at "
+           f"1e-10 and with one RK4 step (`integrator={FIXED_STEP}`); the difference is what the adaptive "
+           "integration costs per period. Beside it, from the same runs, the loop's deadline misses and its "
+           "largest tracking error with each.", "",
+           "| scene | scheduler | load | dopri5 1e-10 [us per period] | RK4 step [us per period] | difference "
+           "| misses: dopri5 / RK4 | tracking error: dopri5 / RK4 |", "|---|---|---|---|---|---|---|---|"]
+    by_scene = {}
+    for scene, (sched, load_), a, b in rows:
+        ca, cb = per_period_us(a), per_period_us(b)
+        by_scene.setdefault(scene, []).append(ca - cb)
+        out.append(f"| {scene} | {sched} | {load_} | {ca:.1f} | {cb:.1f} | {ca - cb:+.1f} | "
+                   f"{a['loop_misses']} / {b['loop_misses']} | {error(a)} / {error(b)} |")
+    out.append("")
+    for scene, diffs in by_scene.items():
+        diffs.sort()
+        median = diffs[len(diffs) // 2] if len(diffs) % 2 else 0.5 * (diffs[len(diffs) // 2 - 1] + diffs[len(diffs) // 2])
+        line = (f"- {scene}: dopri5 at 1e-10 takes {median:+.1f} us of the plant's loop thread per 100 us period beside "
+                "one RK4 step (the median of the differences above; a negative one is the runs' spread)")
+        offline = integrator_errors(d, scene)
+        if offline:
+            line += (f"; offline, against the reference, dopri5 at 1e-10 errs by {offline[0]:.2e} and RK4 at 1e-4 by "
+                     f"{offline[1]:.2e} (What accuracy costs)")
+        out.append(line + ".")
+    return out + [""]
+
+
+def per_period_us(r):
+    """The plant's loop thread's CPU time per period [us] of one loop_vs_floor row."""
+    return 1e3 * r["loop_threads"]["plant"]["main"]["cpu_ms"] / max(r["loop_periods"], 1)
+
+
+def error(r):
+    e = r.get("loop_max_error")
+    return "-" if e is None else f"{e:.1e}"
+
+
+def integrator_errors(d, scene):
+    """(dopri5 at 1e-10, RK4 at 1e-4) max errors of `scene` from accuracy_vs_time, or None."""
+    path = os.path.join(d, "accuracy_vs_time", "integrators.csv")
+    if not os.path.exists(path):
+        return None
+    found = {}
+    with open(path) as f:
+        for row in csv.DictReader(f):
+            if row["scene"] == scene and (row["method"], float(row["setting"])) in (("dopri5", 1e-10), ("rk4", 1e-4)):
+                found[row["method"]] = float(row["max_error"])
+    return (found["dopri5"], found["rk4"]) if len(found) == 2 else None
 
 
 def authentication(d):
