@@ -467,75 +467,78 @@ LOAD_RUNS = (("duffing_alpha4", "loop_vs_floor", "loop_vs_floor_rk4"),
 
 
 def integration_load(d):
-    """Whether the plant's integration is the load at 10 kHz, scene by scene: the plant's loop
-    thread's CPU time per period with the scene's dopri5 at 1e-10 and with one RK4 step, the loop's
-    deadline misses and largest tracking error with each, case by case from the same run; and the
-    two integrators' own error offline (accuracy_vs_time's integrators.csv, when the run has it)."""
-    rows = []
+    """Whether the plant's integration is the load at 10 kHz, scene by scene and integrator by
+    integrator: the right-hand-side evaluations the plant's integrator made per period (the loop
+    runs' summaries), times the cost of one evaluation (accuracy_vs_time's finest RK4 run of the
+    scene, whose right-hand side also evaluates the law: an upper bound for the plant's alone),
+    beside the plant's loop thread's CPU time per period; medians over the run's 10 kHz cases."""
+    cost = rhs_cost_us(d)
+    out = []
     for scene, adaptive, fixed in LOAD_RUNS:
-        runs = {}
-        for name in (adaptive, fixed):
+        for name, label in ((adaptive, "dopri5 1e-10"), (fixed, "RK4, step 1e-4")):
+            evals, loop = [], []
             for r in load(os.path.join(d, name), "loop_vs_floor.json") or []:
-                if "error" in r or r.get("rate_hz") != 10000:
-                    continue
                 main = (r.get("loop_threads") or {}).get("plant", {}).get("main")
-                if main and main.get("threads"):
-                    key = (r["scheduler"], "1 hog" if r["hog"] else "quiet")
-                    runs.setdefault(key, {})[name] = r
-        for key, v in runs.items():
-            if len(v) == 2:
-                rows.append((scene, key, v[adaptive], v[fixed]))
-    if not rows:
+                summary = load(os.path.join(d, name, f"loop_{r.get('tag')}"), "summary.json")
+                if "error" in r or r.get("rate_hz") != 10000 or not (main and main.get("threads")) or not summary:
+                    continue
+                if summary.get("states_published"):
+                    evals.append(summary["rhs_evaluations"] / summary["states_published"])
+                    loop.append(per_period_us(r))
+            if evals:
+                out.append((scene, label, median(evals), cost.get(scene), median(loop)))
+    if not out:
         return []
-    out = ["# Is the plant's integration the load?", "",
-           "The plant's loop thread's CPU time per period at 10 kHz (wake-up, the socket's messages, the "
-           "state's publication, the integration over the period, the sleep), with the scene's dopri5 at "
-           f"1e-10 and with one RK4 step (`integrator={FIXED_STEP}`); the difference is what the adaptive "
-           "integration costs per period. Beside it, from the same runs, the loop's deadline misses and its "
-           "largest tracking error with each.", "",
-           "| scene | scheduler | load | dopri5 1e-10 [us per period] | RK4 step [us per period] | difference "
-           "| misses: dopri5 / RK4 | tracking error: dopri5 / RK4 |", "|---|---|---|---|---|---|---|---|"]
-    by_scene = {}
-    for scene, (sched, load_), a, b in rows:
-        ca, cb = per_period_us(a), per_period_us(b)
-        by_scene.setdefault(scene, []).append(ca - cb)
-        out.append(f"| {scene} | {sched} | {load_} | {ca:.1f} | {cb:.1f} | {ca - cb:+.1f} | "
-                   f"{a['loop_misses']} / {b['loop_misses']} | {error(a)} / {error(b)} |")
-    out.append("")
-    for scene, diffs in by_scene.items():
-        diffs.sort()
-        median = diffs[len(diffs) // 2] if len(diffs) % 2 else 0.5 * (diffs[len(diffs) // 2 - 1] + diffs[len(diffs) // 2])
-        line = (f"- {scene}: dopri5 at 1e-10 takes {median:+.1f} us of the plant's loop thread per 100 us period beside "
-                "one RK4 step (the median of the differences above; a negative one is the runs' spread)")
-        offline = integrator_errors(d, scene)
-        if offline:
-            line += (f"; offline, against the reference, dopri5 at 1e-10 errs by {offline[0]:.2e} and RK4 at 1e-4 by "
-                     f"{offline[1]:.2e} (What accuracy costs)")
-        out.append(line + ".")
-    return out + [""]
+    lines = ["# Is the plant's integration the load?", "",
+             "Per period at 10 kHz (the median over the cases above): the right-hand-side evaluations the "
+             "plant's integrator made (the runs' summaries), the integration's time as those evaluations "
+             "times the cost of one (the scene's RK4 at its finest step in What accuracy costs, whose "
+             "right-hand side also evaluates the law: an upper bound for the plant's alone), and the "
+             "plant's loop thread's CPU time (wake-up, the socket's messages, the state's publication, "
+             "the integration, the sleep).", "",
+             "| scene | integrator | evaluations per period | integration, at most [us] | plant's loop thread [us] "
+             "| integration's share, at most |", "|---|---|---|---|---|---|"]
+    verdicts = {}
+    for scene, label, evals, c, loop in out:
+        if c is None:
+            lines.append(f"| {scene} | {label} | {evals:.1f} | - | {loop:.1f} | - |")
+            continue
+        share = evals * c / loop if loop > 0 else math.nan
+        verdicts.setdefault(scene, []).append((label, share))
+        lines.append(f"| {scene} | {label} | {evals:.1f} | {evals * c:.2f} | {loop:.1f} | {100 * share:.0f} % |")
+    lines.append("")
+    for scene, shares in verdicts.items():
+        worst = max(share for _, share in shares)
+        verdict = ("is the load" if worst >= 0.5 else "is a large part of the load" if worst >= 0.25
+                   else "is not the load: the loop's time is its messages and its timer")
+        lines.append(f"- {scene}: the integration {verdict} (at most {100 * worst:.0f} % of the plant's loop "
+                     "thread with either integrator).")
+    return lines + [""]
+
+
+def median(values):
+    v = sorted(values)
+    n = len(v)
+    return v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2])
+
+
+def rhs_cost_us(d):
+    """Per scene, the cost of one right-hand-side evaluation [us]: its RK4 run with the most
+    evaluations in accuracy_vs_time's integrators.csv (wall time over evaluations)."""
+    path = os.path.join(d, "accuracy_vs_time", "integrators.csv")
+    if not os.path.exists(path):
+        return {}
+    best = {}
+    with open(path) as f:
+        for row in csv.DictReader(f):
+            if row["method"] == "rk4" and int(row["rhs_evaluations"]) > best.get(row["scene"], (0, 0))[0]:
+                best[row["scene"]] = (int(row["rhs_evaluations"]), float(row["wall_s"]))
+    return {scene: 1e6 * wall / evals for scene, (evals, wall) in best.items()}
 
 
 def per_period_us(r):
     """The plant's loop thread's CPU time per period [us] of one loop_vs_floor row."""
     return 1e3 * r["loop_threads"]["plant"]["main"]["cpu_ms"] / max(r["loop_periods"], 1)
-
-
-def error(r):
-    e = r.get("loop_max_error")
-    return "-" if e is None else f"{e:.1e}"
-
-
-def integrator_errors(d, scene):
-    """(dopri5 at 1e-10, RK4 at 1e-4) max errors of `scene` from accuracy_vs_time, or None."""
-    path = os.path.join(d, "accuracy_vs_time", "integrators.csv")
-    if not os.path.exists(path):
-        return None
-    found = {}
-    with open(path) as f:
-        for row in csv.DictReader(f):
-            if row["scene"] == scene and (row["method"], float(row["setting"])) in (("dopri5", 1e-10), ("rk4", 1e-4)):
-                found[row["method"]] = float(row["max_error"])
-    return (found["dopri5"], found["rk4"]) if len(found) == 2 else None
 
 
 def authentication(d):
