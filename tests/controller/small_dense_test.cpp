@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 
@@ -42,7 +43,8 @@ TEST(SmallDense, CholeskyRejectsWhatIsNotPositiveDefinite) {
 }
 
 // all_finite against std::isfinite: every special value (infinities, NaNs of both signs, the
-// largest and the subnormal values, zeros) at every position of every length up to 40.
+// largest and the subnormal values, zeros) at every position of every length up to 40; with a
+// copy, the same answer and every entry copied bit for bit, those after a non-finite one too.
 template <typename Scalar>
 void expect_all_finite_matches_isfinite() {
   using limits = std::numeric_limits<Scalar>;
@@ -56,6 +58,12 @@ void expect_all_finite_matches_isfinite() {
         for (int i = 0; i < n; ++i) x[i] = Scalar(i) - Scalar(7.5);
         x[at] = v;
         ASSERT_EQ(small_dense::all_finite(x, n), std::isfinite(v)) << v << " at " << at << " of " << n;
+        Scalar copy[40];
+        for (Scalar& c : copy) c = Scalar(99);
+        ASSERT_EQ(small_dense::all_finite(x, n, copy), std::isfinite(v)) << v << " at " << at << " of " << n;
+        ASSERT_EQ(std::memcmp(copy, x, sizeof(Scalar) * static_cast<std::size_t>(n)), 0)
+            << "the copy of " << n << " entries with " << v << " at " << at;
+        if (n < 40) ASSERT_EQ(copy[n], Scalar(99)) << "written past the copy's end";
       }
     }
   }

@@ -32,6 +32,14 @@ using IeeeBits = std::conditional_t<
     std::conditional_t<sizeof(Scalar) == 8, std::uint64_t, std::conditional_t<sizeof(Scalar) == 4, std::uint32_t, void>>>;
 template <typename Scalar>
 inline constexpr bool kHasIeeeBits = !std::is_void_v<IeeeBits<Scalar>>;
+
+// Two adjacent entries (an even row and the odd one below it) as one value: an SSE2 packet for
+// double, so that the kernels' pairs of rows run as one load, multiply and add each rather than
+// as whatever the compiler's vectorizer makes of a short loop with run-time bounds (for the Gram
+// matrix's blocks, nothing: they ran scalar). The same arithmetic entry by entry, so the same
+// rounding; plain scalar code where there is no packet of two (float, a CPU without SIMD).
+template <typename Scalar>
+using Pair = Eigen::Array<Scalar, 2, 1>;
 }  // namespace detail
 
 /// Every entry finite, and when `copy` is given, the entries copied into it on the way (one pass
@@ -41,32 +49,45 @@ inline constexpr bool kHasIeeeBits = !std::is_void_v<IeeeBits<Scalar>>;
 /// ones, and adding the exponent's lowest bit to the field carries into the sign bit exactly then.
 /// One AND, one addition and one OR per entry, in integers, so the loop vectorizes (a
 /// floating-point sum of x - x runs as a few dependent chains of additions).
-template <typename Scalar>
-bool all_finite(const Scalar* x, int count, Scalar* copy = nullptr) noexcept {
-  if (!detail::kHasIeeeBits<Scalar> || count < 16) {
-    bool finite = true;
-    for (int i = 0; i < count && (finite || copy != nullptr); ++i) {
-      if (copy != nullptr) copy[i] = x[i];
-      finite = finite && std::isfinite(x[i]);
+namespace detail {
+// all_finite with or without its copy, as two instantiations: the copy's test is decided at
+// compile time, not in the loop (at -O2 the compiler does not take it out; on the Cortex-M7 the
+// test in the loop cost the differential drive's law 11 % more instructions).
+template <bool kCopy, typename Scalar>
+bool all_finite(const Scalar* x, int count, Scalar* copy) noexcept {
+  if (!kHasIeeeBits<Scalar> || count < 16) {
+    for (int i = 0; i < count; ++i) {
+      if constexpr (kCopy) copy[i] = x[i];
+      if (!std::isfinite(x[i])) {
+        if constexpr (kCopy)
+          for (int j = i + 1; j < count; ++j) copy[j] = x[j];
+        return false;
+      }
     }
-    return finite;
+    return true;
   }
-  if constexpr (detail::kHasIeeeBits<Scalar>) {
-    using Bits = detail::IeeeBits<Scalar>;
+  if constexpr (kHasIeeeBits<Scalar>) {
+    using Bits = IeeeBits<Scalar>;
     constexpr int kMantissa = std::numeric_limits<Scalar>::digits - 1;  // 52 or 23 bits
     constexpr Bits kExponent = ((Bits(1) << (sizeof(Scalar) * 8 - 1)) - 1) & ~((Bits(1) << kMantissa) - 1);
     constexpr Bits kLowest = Bits(1) << kMantissa;
     constexpr Bits kSign = Bits(1) << (sizeof(Scalar) * 8 - 1);
     Bits carried = 0;
-    for (int i = 0; i < count; ++i) {  // the test on `copy` is hoisted out of the loop
+    for (int i = 0; i < count; ++i) {
       Bits b;
       std::memcpy(&b, x + i, sizeof b);
-      if (copy != nullptr) std::memcpy(copy + i, &b, sizeof b);
+      if constexpr (kCopy) std::memcpy(copy + i, &b, sizeof b);
       carried |= (b & kExponent) + kLowest;
     }
     return (carried & kSign) == 0;
   }
   return true;  // not reached: every other type took the loop above
+}
+}  // namespace detail
+
+template <typename Scalar>
+bool all_finite(const Scalar* x, int count, Scalar* copy = nullptr) noexcept {
+  return copy != nullptr ? detail::all_finite<true>(x, count, copy) : detail::all_finite<false>(x, count, copy);
 }
 
 /// x . y; from 8 entries with four partial sums side by side (a dot product's one accumulator is
@@ -171,7 +192,14 @@ bool cholesky_in_place(Eigen::Matrix<Scalar, N, N>& m, Scalar* reciprocal) noexc
     for (int j = k + 2; j < N; ++j) {  // m_ij -= (L_1)_ik p0 (L_1)_jk + (L_1)_i,k+1 p1 (L_1)_j,k+1
       Scalar* cj = a + j * N;
       const Scalar wj = c0[j] * p0, uj = c1[j] * p1;
-      for (int i = j; i < N; ++i) cj[i] -= c0[i] * wj + c1[i] * uj;
+      int i = j;  // from the diagonal: an odd row alone, then pairs of rows from an even one
+      if ((i & 1) != 0) {
+        cj[i] -= c0[i] * wj + c1[i] * uj;
+        ++i;
+      }
+      using P2 = detail::Pair<Scalar>;
+      for (; i + 1 < N; i += 2) P2::Map(cj + i) -= P2::Map(c0 + i) * wj + P2::Map(c1 + i) * uj;
+      if (i < N) cj[i] -= c0[i] * wj + c1[i] * uj;
     }
   }
   if constexpr (N % 2 == 1) {  // the last pivot alone
@@ -387,25 +415,26 @@ void gram(const Eigen::Matrix<Scalar, N, K>& x, Eigen::Matrix<Scalar, K, K>& g, 
     const Scalar* xi1 = d + i1 * N;
     const Scalar* xj0 = d + j * N;
     const Scalar* xj1 = d + j1 * N;
-    Scalar s00[2] = {}, s01[2] = {}, s10[2] = {}, s11[2] = {};
+    using P2 = detail::Pair<Scalar>;  // (even rows' sum, odd rows' sum)
+    P2 s00 = P2::Zero(), s01 = P2::Zero(), s10 = P2::Zero(), s11 = P2::Zero();
     int k = from;  // even
-    for (; k + 1 < to; k += 2)
-      for (int h = 0; h < 2; ++h) {
-        s00[h] += xi0[k + h] * xj0[k + h];
-        s01[h] += xi0[k + h] * xj1[k + h];
-        s10[h] += xi1[k + h] * xj0[k + h];
-        s11[h] += xi1[k + h] * xj1[k + h];
-      }
-    if (k < to) {
-      s00[0] += xi0[k] * xj0[k];
-      s01[0] += xi0[k] * xj1[k];
-      s10[0] += xi1[k] * xj0[k];
-      s11[0] += xi1[k] * xj1[k];
+    for (; k + 1 < to; k += 2) {
+      const P2 a0 = P2::Map(xi0 + k), a1 = P2::Map(xi1 + k), b0 = P2::Map(xj0 + k), b1 = P2::Map(xj1 + k);
+      s00 += a0 * b0;
+      s01 += a0 * b1;
+      s10 += a1 * b0;
+      s11 += a1 * b1;
     }
-    g(i, j) = s00[0] + s00[1];
-    if (cols == 2) g(i, j + 1) = s01[0] + s01[1];
-    if (rows == 2) g(i + 1, j) = s10[0] + s10[1];
-    if (rows == 2 && cols == 2) g(i + 1, j + 1) = s11[0] + s11[1];
+    if (k < to) {
+      s00(0) += xi0[k] * xj0[k];
+      s01(0) += xi0[k] * xj1[k];
+      s10(0) += xi1[k] * xj0[k];
+      s11(0) += xi1[k] * xj1[k];
+    }
+    g(i, j) = s00(0) + s00(1);
+    if (cols == 2) g(i, j + 1) = s01(0) + s01(1);
+    if (rows == 2) g(i + 1, j) = s10(0) + s10(1);
+    if (rows == 2 && cols == 2) g(i + 1, j + 1) = s11(0) + s11(1);
   };
   for (int j = 0; j < K; j += 2) {
     const int cols = std::min(2, K - j);
