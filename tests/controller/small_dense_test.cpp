@@ -63,7 +63,9 @@ void expect_all_finite_matches_isfinite() {
         ASSERT_EQ(small_dense::all_finite(x, n, copy), std::isfinite(v)) << v << " at " << at << " of " << n;
         ASSERT_EQ(std::memcmp(copy, x, sizeof(Scalar) * static_cast<std::size_t>(n)), 0)
             << "the copy of " << n << " entries with " << v << " at " << at;
-        if (n < 40) ASSERT_EQ(copy[n], Scalar(99)) << "written past the copy's end";
+        if (n < 40) {
+          ASSERT_EQ(copy[n], Scalar(99)) << "written past the copy's end";
+        }
       }
     }
   }
