@@ -14,6 +14,7 @@ import json
 import math
 import os
 import sys
+from statistics import median
 
 BEGIN, END = "<!-- scripts/bench: begin", "<!-- scripts/bench: end"
 
@@ -46,7 +47,7 @@ def benchmarks(doc):
         b = r.get("median") or r["iterations"][0]
         scale = {"ns": 1, "us": 1e3, "ms": 1e6, "s": 1e9}[b.get("time_unit", "ns")]
         it = r.get("iterations", [b])
-        counters = {k: sorted(x[k] for x in it)[len(it) // 2] for k in ("p50_ns", "p99_ns", "p999_ns", "max_ns",
+        counters = {k: median(x[k] for x in it) for k in ("p50_ns", "p99_ns", "p999_ns", "max_ns",
                                                                         "allocs_per_call") if k in it[0]}
         counters["max_ns"] = max(x.get("max_ns", 0) for x in it)
         out[name] = (b["real_time"] * scale, counters)
@@ -514,12 +515,6 @@ def integration_load(d):
         lines.append(f"- {scene}: the integration {verdict} (at most {100 * worst:.0f} % of the plant's loop "
                      "thread with either integrator).")
     return lines + [""]
-
-
-def median(values):
-    v = sorted(values)
-    n = len(v)
-    return v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2])
 
 
 def rhs_cost_us(d):
