@@ -47,8 +47,8 @@ def benchmarks(doc):
         b = r.get("median") or r["iterations"][0]
         scale = {"ns": 1, "us": 1e3, "ms": 1e6, "s": 1e9}[b.get("time_unit", "ns")]
         it = r.get("iterations", [b])
-        counters = {k: median(x[k] for x in it) for k in ("p50_ns", "p99_ns", "p999_ns", "max_ns",
-                                                                        "allocs_per_call") if k in it[0]}
+        counters = {k: median(x[k] for x in it)
+                    for k in ("p50_ns", "p99_ns", "p999_ns", "max_ns", "allocs_per_call") if k in it[0]}
         counters["max_ns"] = max(x.get("max_ns", 0) for x in it)
         out[name] = (b["real_time"] * scale, counters)
     return out
