@@ -25,6 +25,7 @@ void write_controller_stats(const std::string& path, const std::string& model, c
       {"process", "controller"},        {"model", model},
       {"commands_published", c.served}, {"commands_failed", c.failed},
       {"commands_repeated", c.repeated}, {"states_superseded", c.superseded},
+      {"largest_backlog", c.largest_backlog},
       {"states_duplicated", c.duplicates},
       {"runs", c.runs},
       {"messages_rejected", c.rejected}, {"rejected_malformed", c.malformed},

@@ -181,6 +181,7 @@ def merged_summary(args, out, plant_status, controller_status):
         "log_dropped": summary.get("log_dropped", 0) + ctrl.get("log_dropped", 0),
         "commands_published": ctrl.get("commands_published", 0),
         "states_superseded": ctrl.get("states_superseded", 0),
+        "largest_backlog": ctrl.get("largest_backlog", 0),
         "compute_ns_at_plant": summary.get("compute_ns"),
         "compute_ns": ctrl.get("compute_ns", summary.get("compute_ns")),
         "lcm_url": args.lcm_url or os.environ.get("LCM_DEFAULT_URL", "(LCM default)"),

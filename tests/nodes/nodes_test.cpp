@@ -409,6 +409,7 @@ TEST_F(ControllerFixture, ServeAnswersOnlyTheNewestQueuedState) {
   EXPECT_EQ(node.counts().served, 1);
   EXPECT_EQ(node.counts().superseded, 4);
   EXPECT_EQ(node.counts().duplicates, 1);
+  EXPECT_EQ(node.counts().largest_backlog, 6);  // five states and a duplicate found queued at once
   EXPECT_EQ(node.compute_ns().count(), 1u);
 
   // The answered state again (a lock-step plant asking after a lost answer): the same command,
@@ -435,6 +436,7 @@ TEST_F(ControllerFixture, ServeAnswersOnlyTheNewestQueuedState) {
   EXPECT_EQ(out.commands[1].state_sequence, 6);
   EXPECT_EQ(node.counts().stale, 1);
   EXPECT_EQ(node.counts().superseded, 4);
+  EXPECT_EQ(node.counts().largest_backlog, 6);  // the largest, not the last
   // Nothing queued: nothing answered, nothing counted.
   EXPECT_EQ(node.serve(lcm, 0), 0);
   EXPECT_EQ(node.counts().served, 2);

@@ -56,6 +56,8 @@ struct ControllerCounts {
   long served = 0;    ///< states answered with a command
   long repeated = 0;  ///< repeated states answered again with the same command
   long superseded = 0;  ///< states not answered: a newer one was queued behind them
+  long largest_backlog = 0;  ///< the most states one serve() found queued (capped at kMaxBatch + 1):
+                             ///< how far the controller fell behind (the machine held it or the link back)
   long duplicates = 0;  ///< states that came again before their answer (answered once)
   long failed = 0;    ///< commands reporting a failed solve (force zero)
   long rejected = 0;  ///< states refused (any reason below)
@@ -95,8 +97,10 @@ class ControllerNode {
   /// LCM subscription handler: inside serve() it takes the state for serve() to answer, outside
   /// it answers the state at once (handle()).
   void on_state(const lcm::ReceiveBuffer* rbuf, const std::string&) noexcept {
-    if (serving_) receive(rbuf->data, rbuf->data_size);
-    else handle(rbuf->data, rbuf->data_size);
+    if (serving_) {
+      ++batch_;
+      receive(rbuf->data, rbuf->data_size);
+    } else handle(rbuf->data, rbuf->data_size);
   }
 
   /// Waits up to `timeout_ms` for a message on `lcm`, takes every message already queued behind
@@ -104,10 +108,12 @@ class ControllerNode {
   /// lcm.handleTimeout returned for the first message (< 0: LCM failed).
   int serve(lcm::LCM& lcm, int timeout_ms) noexcept {
     serving_ = true;
+    batch_ = 0;
     const int first = lcm.handleTimeout(timeout_ms);
     for (int i = 0; first > 0 && i < kMaxBatch && lcm.handleTimeout(0) > 0; ++i) {
     }
     serving_ = false;
+    if (batch_ > counts_.largest_backlog) counts_.largest_backlog = batch_;
     answer();
     return first;
   }
@@ -241,6 +247,7 @@ class ControllerNode {
   control_diagnostics_t diag_{};
   bool pending_ = false;  ///< slots_[kept_] waits for its answer
   bool serving_ = false;  ///< inside serve(): on_state only takes states
+  long batch_ = 0;        ///< states taken in the present serve()
   std::array<std::uint8_t, kMessageBufferBytes> buffer_{}, last_command_{};
   int last_bytes_ = 0;
   bool measured_delay_ = true;
