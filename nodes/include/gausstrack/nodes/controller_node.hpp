@@ -56,8 +56,8 @@ struct ControllerCounts {
   long served = 0;    ///< states answered with a command
   long repeated = 0;  ///< repeated states answered again with the same command
   long superseded = 0;  ///< states not answered: a newer one was queued behind them
-  long largest_backlog = 0;  ///< the most states one serve() found queued (capped at kMaxBatch + 1):
-                             ///< how far the controller fell behind (the machine held it or the link back)
+  long largest_backlog = 0;  ///< the most new states of the plant one serve() found queued (at most
+                             ///< kMaxBatch + 1): how far behind the machine held the controller or its link
   long duplicates = 0;  ///< states that came again before their answer (answered once)
   long failed = 0;    ///< commands reporting a failed solve (force zero)
   long rejected = 0;  ///< states refused (any reason below)
@@ -97,10 +97,8 @@ class ControllerNode {
   /// LCM subscription handler: inside serve() it takes the state for serve() to answer, outside
   /// it answers the state at once (handle()).
   void on_state(const lcm::ReceiveBuffer* rbuf, const std::string&) noexcept {
-    if (serving_) {
-      ++batch_;
-      receive(rbuf->data, rbuf->data_size);
-    } else handle(rbuf->data, rbuf->data_size);
+    if (serving_) receive(rbuf->data, rbuf->data_size);
+    else handle(rbuf->data, rbuf->data_size);
   }
 
   /// Waits up to `timeout_ms` for a message on `lcm`, takes every message already queued behind
@@ -166,6 +164,7 @@ class ControllerNode {
     last_sequence_ = in.msg.sequence;
     kept_ = 1 - kept_;
     pending_ = true;
+    if (serving_) ++batch_;
   }
 
   const ControllerCounts& counts() const noexcept { return counts_; }
@@ -247,7 +246,7 @@ class ControllerNode {
   control_diagnostics_t diag_{};
   bool pending_ = false;  ///< slots_[kept_] waits for its answer
   bool serving_ = false;  ///< inside serve(): on_state only takes states
-  long batch_ = 0;        ///< states taken in the present serve()
+  long batch_ = 0;        ///< new states taken in the present serve()
   std::array<std::uint8_t, kMessageBufferBytes> buffer_{}, last_command_{};
   int last_bytes_ = 0;
   bool measured_delay_ = true;
