@@ -27,6 +27,8 @@ import subprocess
 import sys
 import time
 
+from machine_stall import machine_stall
+
 DURATION = 3.0
 FAULT_AT = 1.0  # s into the run
 
@@ -213,27 +215,6 @@ def run_case(idx, name, relay_args, crash, bin_dir, test_bin, scene, out):
                 settled = t
         recovery = None if settled is None else max(0.0, settled - fault_end)
     return s, errors, ctrl, recovery
-
-
-# A process of the loop held back this long was stalled by the machine (a virtual machine's host
-# taking its CPU, another process), not by the fault: no network fault or crash of the other
-# process delays the plant's own wake-ups, and the relay only bunches states up by its jitter
-# (a few periods), so a controller that found 10 periods' states queued at once was held back, or
-# its link was. A case that misses its expectation in such a run is run once more (the table
-# says so); a product fault shows in both runs.
-STALL_MS = 10.0
-PERIOD_MS = 1.0  # control.rate=1000
-
-
-def machine_stall(s, ctrl):
-    late_ms = (s.get("wake_late_us") or {}).get("max", 0.0) / 1e3
-    if late_ms > STALL_MS:
-        return f"the machine stalled the plant {late_ms:.0f} ms"
-    backlog = max((c.get("largest_backlog", 0) for c in ctrl), default=0)
-    if backlog * PERIOD_MS >= STALL_MS:
-        return (f"the machine held the controller or its link back {backlog * PERIOD_MS:.0f} ms or more "
-                f"({backlog} states found queued at once)")
-    return None
 
 
 def check(expect, s, errors, ctrl):

@@ -31,6 +31,7 @@ import subprocess
 import sys
 
 from fault_campaign import wait_ready  # same directory
+from machine_stall import STALL_MS, machine_stall
 
 RATE = 1000
 # Ten time constants of the stabilization (1 / omega = 50 ms; critically damped, a disturbance
@@ -38,7 +39,6 @@ RATE = 1000
 # ends below the lock-step error (1.5e-6 m). Six (to 2 %) left such an excursion at 3e-5 m, 20x it.
 WINDOW_S = 0.5
 MIN_CLEAN = 0.10  # 30 of 300 samples, 0.3 s of the trajectory at least
-STALL_MS = 10
 MISSING_SHARE = 0.01
 
 
@@ -86,7 +86,7 @@ def run(name, port, out, bin_dir, test_bin, scene, lockstep=False, hold="midpoin
     errors = sorted(e for _, e in samples)
     r = {"name": name, "summary": summary, "samples": samples, "median": errors[len(errors) // 2],
          "max": errors[-1], "stall_ms": 0.0 if lockstep else summary["wake_late_us"]["max"] / 1e3}
-    r["held_back"] = (r["stall_ms"] > STALL_MS or
+    r["held_back"] = (machine_stall(summary, period_ms=1e3 / RATE) is not None or
                       summary["commands_missing"] > MISSING_SHARE * summary["states_published"])
     if not lockstep:
         periods = list(csv.DictReader(open(os.path.join(work, "plant", "periods.csv"))))
@@ -150,7 +150,7 @@ def main(bin_dir, test_bin, scene, out):
             verdict, held_back = check(out, bin_dir, test_bin, scene)
             if verdict == "pass" or attempt == 2 or not held_back:
                 break
-            print(f"{check.__name__}: the machine held a run back (a wake over {STALL_MS} ms late, or over "
+            print(f"{check.__name__}: the machine held a run back (a wake over {STALL_MS:g} ms late, or over "
                   f"{MISSING_SHARE:.0%} of the periods without their answer); running it again", flush=True)
         verdicts[check.__name__] = verdict
     print("sampled_law_lcm: " + ", ".join(f"{name} {v}" for name, v in verdicts.items()))
