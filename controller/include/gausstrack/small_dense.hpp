@@ -213,17 +213,32 @@ bool cholesky_in_place(Eigen::Matrix<Scalar, N, N>& m, Scalar* reciprocal) noexc
       c0[i] = w * r0;
       c1[i] = u * r1;
     }
-    for (int j = k + 2; j < N; ++j) {  // m_ij -= (L_1)_ik p0 (L_1)_jk + (L_1)_i,k+1 p1 (L_1)_j,k+1
+    // m_ij -= (L_1)_ik p0 (L_1)_jk + (L_1)_i,k+1 p1 (L_1)_j,k+1, two columns j, j + 1 at a time
+    // (j even, as k is): rows j, j + 1 of column j and row j + 1 of column j + 1, then the pairs
+    // of rows below for both columns, each pair of c0 and c1 loaded once for the two.
+    using P2 = detail::Pair<Scalar>;
+    int j = k + 2;
+    for (; j + 1 < N; j += 2) {
       Scalar* cj = a + j * N;
+      Scalar* cj1 = cj + N;
       const Scalar wj = c0[j] * p0, uj = c1[j] * p1;
-      int i = j;  // from the diagonal: an odd row alone, then pairs of rows from an even one
-      if ((i & 1) != 0) {
-        cj[i] -= c0[i] * wj + c1[i] * uj;
-        ++i;
+      const Scalar wj1 = c0[j + 1] * p0, uj1 = c1[j + 1] * p1;
+      (P2::load(cj + j) - (P2::load(c0 + j) * wj + P2::load(c1 + j) * uj)).store(cj + j);
+      cj1[j + 1] -= c0[j + 1] * wj1 + c1[j + 1] * uj1;
+      int i = j + 2;
+      for (; i + 1 < N; i += 2) {
+        const P2 l0 = P2::load(c0 + i), l1 = P2::load(c1 + i);
+        (P2::load(cj + i) - (l0 * wj + l1 * uj)).store(cj + i);
+        (P2::load(cj1 + i) - (l0 * wj1 + l1 * uj1)).store(cj1 + i);
       }
-      using P2 = detail::Pair<Scalar>;
-      for (; i + 1 < N; i += 2) (P2::load(cj + i) - (P2::load(c0 + i) * wj + P2::load(c1 + i) * uj)).store(cj + i);
-      if (i < N) cj[i] -= c0[i] * wj + c1[i] * uj;
+      if (i < N) {
+        cj[i] -= c0[i] * wj + c1[i] * uj;
+        cj1[i] -= c0[i] * wj1 + c1[i] * uj1;
+      }
+    }
+    if (j < N) {  // N odd: the last column, its diagonal entry alone
+      Scalar* cj = a + j * N;
+      cj[j] -= c0[j] * (c0[j] * p0) + c1[j] * (c1[j] * p1);
     }
   }
   if constexpr (N % 2 == 1) {  // the last pivot alone
