@@ -1,14 +1,14 @@
 // The actuated law (actuation.hpp) beside the plain law of eq. (32) on the same model and beside
-// a Lagrange-multiplier solve of the same problem, in the same run, all factoring A on every call
-// (the actuated law always does):
-//   actuation/<case>/actuated   ActuatedController: the commands of K actuators (Gauss's weight)
+// a Lagrange-multiplier solve of the same problem, in the same run, all factoring A on every call:
+//   actuation/<case>/actuated   ActuatedController: the commands of K actuators (Gauss's weight),
+//                               reuse_factorization off
 //   actuation/<case>/law        TrackingController on the same model, every coordinate actuated,
 //                               reuse_factorization off
 //   actuation/<case>/kkt        the same least-cost problem (and physical rows) as one dynamic-size
 //                               LU (dynamic_kkt_control), the model's terms and B included; its
 //                               answer is checked against the law's before timing
 // Cases <family>_no_b are models that declare no B, controlled through B = I by ActuatedController:
-// the actuated law's cost where it must equal eq. (32).
+// the actuated law's cost where it is eq. (32) (its plain case, solved by the plain law's solver).
 #include <string>
 
 #include "controller_bench.hpp"
@@ -37,7 +37,9 @@ struct Actuated : M {
 template <typename A>
 void bench_actuated(benchmark::State& state) {
   static const States<A> s;
-  ActuatedController<A> controller{A{}};
+  ControllerOptions<double> options;
+  options.solver.reuse_factorization = false;  // as the plain law's row: A factored every call
+  ActuatedController<A> controller(A{}, options);
   typename ActuatedController<A>::Output out;
   measure(state, [&](std::size_t k) {
     benchmark::DoNotOptimize(controller.compute(s.q[k], s.qd[k], s.t[k], out));

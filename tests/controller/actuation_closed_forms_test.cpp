@@ -101,6 +101,84 @@ TEST(Actuation, DependentActuatorsAreRefusedUnderGausssWeight) {
   EXPECT_TRUE(out.control.isZero(0));
 }
 
+// A model without B or physical rows, under Gauss's weight with every row active, is eq. (32): the
+// controller answers it with the plain law's solver. The general path answers the same problem
+// when Gauss's weight is given by hand (W = A^-1, set_weight): the two must agree on every output
+// and flag, and on the rows they leave unmet.
+template <int N, int P>
+void expect_plain_case_as_the_general_path(ActuatedController<GivenUnactuated<N, P>>& plain, const char* what) {
+  using S = GivenUnactuated<N, P>;
+  ActuatedController<S> general(plain.model());
+  ASSERT_TRUE(general.set_weight(plain.model().A.inverse())) << what;
+  ASSERT_TRUE(general.set_actuator_limit(plain.actuator_limit())) << what;
+  typename ActuatedController<S>::Output p, g;
+  const Eigen::Matrix<double, N, 1> zero = Eigen::Matrix<double, N, 1>::Zero();
+  ASSERT_EQ(plain.compute(zero, zero, 0.0, p), Status::kOk) << what;
+  ASSERT_EQ(general.compute(zero, zero, 0.0, g), Status::kOk) << what;
+  const double scale = 1.0 + g.control.norm();
+  EXPECT_TRUE(near(p.control, g.control, 1e-9, scale, "control")) << what;
+  EXPECT_TRUE(near(p.closed_loop, g.closed_loop, 1e-9, scale, "closed loop")) << what;
+  EXPECT_TRUE(near(p.feedforward, g.feedforward, 1e-9, scale, "feedforward")) << what;
+  EXPECT_TRUE(near(p.acceleration, g.acceleration, 1e-9, 1.0 + g.acceleration.norm(), "q''")) << what;
+  EXPECT_TRUE(near(p.row_residual, g.row_residual, 1e-9, 1.0 + g.acceleration.norm(), "residual")) << what;
+  EXPECT_EQ(p.force, p.control) << what;
+  EXPECT_EQ(p.unmet_rows, g.unmet_rows) << what;
+  EXPECT_EQ(p.diagnostics.rank, g.diagnostics.rank) << what;
+  EXPECT_NEAR(p.saturation_scale, g.saturation_scale, 1e-12) << what;
+  constexpr std::uint32_t kCompared = warning::kRankDeficient | warning::kConstraintsNotMet | warning::kSaturated;
+  EXPECT_EQ(p.diagnostics.warnings & kCompared, g.diagnostics.warnings & kCompared) << what;
+}
+
+TEST(Actuation, WithoutBThePlainCaseIsTheGeneralPathUnderGausssWeight) {
+  RandomSource<double> rng(23);
+  for (int k = 0; k < 10; ++k) {  // rows of full rank, met
+    ActuatedController<GivenUnactuated<4, 2>> c(GivenUnactuated<4, 2>::random(rng));
+    expect_plain_case_as_the_general_path(c, "random 4 x 2");
+    ActuatedController<GivenUnactuated<4, 2>>::Output out;
+    ASSERT_EQ(c.compute(Eigen::Vector4d::Zero(), Eigen::Vector4d::Zero(), 0.0, out), Status::kOk);
+    EXPECT_EQ(out.unmet_rows, 0u);
+  }
+  {  // the same row twice with two right sides: rank 1, both rows missed by the least-squares answer
+    GivenUnactuated<3, 2> sys = GivenUnactuated<3, 2>::random(rng);
+    sys.D.row(1) = sys.D.row(0);
+    sys.g << 1.0, 2.0;
+    ActuatedController<GivenUnactuated<3, 2>> c(sys);
+    expect_plain_case_as_the_general_path(c, "redundant rows");
+    ActuatedController<GivenUnactuated<3, 2>>::Output out;
+    ASSERT_EQ(c.compute(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 0.0, out), Status::kOk);
+    EXPECT_EQ(out.unmet_rows, 0b11u);
+    EXPECT_TRUE(out.diagnostics.has(warning::kRankDeficient));
+    EXPECT_NEAR(out.row_residual(0), 0.5, 1e-12);  // D q'' = 1.5 for both rows
+    EXPECT_NEAR(out.row_residual(1), -0.5, 1e-12);
+  }
+  for (int k = 0; k < 5; ++k) {  // limits a tenth of the free command: u scaled, q'' with it, rows unmet
+    ActuatedController<GivenUnactuated<4, 2>> c(GivenUnactuated<4, 2>::random(rng));
+    ActuatedController<GivenUnactuated<4, 2>>::Output free;
+    ASSERT_EQ(c.compute(Eigen::Vector4d::Zero(), Eigen::Vector4d::Zero(), 0.0, free), Status::kOk);
+    ASSERT_TRUE(c.set_actuator_limit(Eigen::Vector4d::Constant(0.1 * free.control.cwiseAbs().maxCoeff())));
+    expect_plain_case_as_the_general_path(c, "limited");
+    ActuatedController<GivenUnactuated<4, 2>>::Output out;
+    ASSERT_EQ(c.compute(Eigen::Vector4d::Zero(), Eigen::Vector4d::Zero(), 0.0, out), Status::kOk);
+    EXPECT_TRUE(out.diagnostics.has(warning::kSaturated));
+    const Eigen::Vector4d a = c.model().A.ldlt().solve(c.model().Q - c.model().f);
+    EXPECT_TRUE(near(out.acceleration, a + c.model().A.ldlt().solve(out.force), 1e-10, 1.0 + a.norm(), "q''"));
+    EXPECT_NE(out.unmet_rows, 0u);
+  }
+}
+
+// The plain case keeps the controller's own history of the rows' reach (kVanishingReach), so
+// that a reach a billion times below the largest seen is flagged.
+TEST(Actuation, WithoutBThePlainCaseFlagsAVanishingReach) {
+  RandomSource<double> rng(29);
+  ActuatedController<GivenUnactuated<3, 1>> c(GivenUnactuated<3, 1>::random(rng));
+  ActuatedController<GivenUnactuated<3, 1>>::Output out;
+  ASSERT_EQ(c.compute(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 0.0, out), Status::kOk);
+  EXPECT_FALSE(out.diagnostics.has(warning::kVanishingReach));
+  c.model().D *= 1e-9;
+  ASSERT_EQ(c.compute(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 0.0, out), Status::kOk);
+  EXPECT_TRUE(out.diagnostics.has(warning::kVanishingReach));
+}
+
 TEST(Actuation, ANonFiniteActuationIsRefusedWithZeroOutputs) {
   GivenSystem<2, 1, 1> sys;
   sys.D << 1, -1;

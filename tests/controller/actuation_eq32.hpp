@@ -38,7 +38,9 @@ void expect_equal_to_eq32(const M& model, const char* name) {
     o.stabilization = {1.0, 20.0};
     TrackingController<M> plain(model, o);
     ActuatedController<FullyActuated<M>> actuated(FullyActuated<M>(model), o);
-    ActuatedController<M> bare(model, o);  // no B declared: B = I through W^(1/2) = L^-1
+    // No B declared: the plain case (the plain law's solver) under the Cholesky and SVD
+    // strategies, B = I through W^(1/2) = L^-1 under the complete-orthogonal one.
+    ActuatedController<M> bare(model, o);
     typename TrackingController<M>::Output expected;
     typename ActuatedController<FullyActuated<M>>::Output got;
     typename ActuatedController<M>::Output got_bare;

@@ -47,6 +47,35 @@ struct GivenSystem {
   }
 };
 
+// The same without B: every coordinate actuated (B = I).
+template <int N, int P>
+struct GivenUnactuated {
+  using Scalar = double;
+  static constexpr int kDof = N;
+  static constexpr int kConstraints = P;
+  Eigen::Matrix<double, N, N> A = Eigen::Matrix<double, N, N>::Identity();
+  Eigen::Matrix<double, N, 1> f = Eigen::Matrix<double, N, 1>::Zero(), Q = Eigen::Matrix<double, N, 1>::Zero();
+  Eigen::Matrix<double, P, N> D = Eigen::Matrix<double, P, N>::Zero();
+  Eigen::Matrix<double, P, 1> g = Eigen::Matrix<double, P, 1>::Zero();
+  void evaluate(const Eigen::Matrix<double, N, 1>&, const Eigen::Matrix<double, N, 1>&, double,
+                ModelTerms<N, P, double>& terms) const noexcept {
+    terms.mass_matrix = A;
+    terms.nonlinear_force = f;
+    terms.applied_force = Q;
+    terms.constraint_matrix = D;
+    terms.constraint_rhs = g;
+  }
+  static GivenUnactuated random(RandomSource<double>& rng) {
+    GivenUnactuated s;
+    s.A = rng.spd<N>(100.0, 2.0);
+    s.f = rng.matrix<N, 1>();
+    s.Q = rng.matrix<N, 1>();
+    s.D = rng.matrix<P, N>();
+    s.g = rng.matrix<P, 1>();
+    return s;
+  }
+};
+
 // The Duffing pair with a force on mass 1 alone.
 struct Duffing1 : systems::CoupledDuffing<double> {
   static constexpr int kActuators = 1;

@@ -41,7 +41,8 @@
 //   Status::kWeightNotPositiveDefinite.
 // - A given weight W = Lw Lw^T (set_weight): U is replaced by L^-1 B Lw^-T and R^-1 by Lw^-T.
 // - Without B and with Gauss's weight, W^(1/2) = L^-1: the task matrix is C_c itself and
-//   u = L x, eq. (32) with nothing more to compute.
+//   u = L x. Without physical rows too, every row active, under the default or the SVD strategy,
+//   that is eq. (32) (the plain case): the plain law's own solver (ConstraintSolver) answers it.
 // The task's pseudo-inverse: under the default strategy (kCholeskyWithFallback) its normal
 // equations T^T (T T^T)^-1 when every task row is active and the Cholesky factor of T T^T shows T
 // of full row rank, well conditioned and above the floor, as the plain law answers eq. (32);
@@ -153,7 +154,7 @@ class ActuatedController {
   /// Throws std::invalid_argument (when exceptions are enabled; traps otherwise) if
   /// `options.validate()` reports a problem.
   explicit ActuatedController(M model = M{}, const Options& options = Options{})
-      : model_(std::move(model)), options_(options) {
+      : model_(std::move(model)), options_(options), plain_solver_(plain_solver_options(options.solver)) {
     if (const char* problem = options.validate()) config_error(problem);
     row_gains_.fill(options.stabilization);
     row_robust_.fill(options.robust);
@@ -193,7 +194,10 @@ class ActuatedController {
   /// nothing, for a row out of range or a physical row (the environment holds it regardless).
   bool set_row_active(int row, bool active) noexcept {
     if (row < 0 || row >= P || RowLayout<M>::physical(row)) return false;
-    if (active_[static_cast<std::size_t>(row)] != active) prediction_.forget();
+    if (active_[static_cast<std::size_t>(row)] != active) {
+      prediction_.forget();
+      inactive_rows_ += active ? -1 : 1;
+    }
     active_[static_cast<std::size_t>(row)] = active;
     return true;
   }
@@ -231,6 +235,7 @@ class ActuatedController {
     limit_ = limit;
     return true;
   }
+  const VectorK& actuator_limit() const noexcept { return limit_; }
 
   /// The sampled-data hold, as TrackingController::set_hold (the same prediction, through the
   /// acceleration the actuated commands give). Returns false, changing nothing, unless period and
@@ -286,11 +291,13 @@ class ActuatedController {
     // accumulates starts afresh here.
     out.unmet_rows = 0;
     out.saturation_scale = Scalar(1);
-    out.diagnostics = SolveDiagnostics<Scalar>{};
     evaluate_model(model_, qv, qdv, t, terms_);
     if constexpr (ActuatedModel<M>) model_.actuation(qv, t, b_);  // else B = I, set once
     out.constraint_error = terms_.constraint_error;
     out.constraint_error_rate = terms_.constraint_error_rate;
+    if constexpr (kHasPlainCase)
+      if (plain_case()) return evaluate_plain(out);
+    out.diagnostics = SolveDiagnostics<Scalar>{};
     using small_dense::all_finite;
     std::uint32_t bad = 0;
     if constexpr (kMassMatrixOf<M> == MassMatrix::kDiagonal) {  // read on its diagonal only
@@ -310,16 +317,8 @@ class ActuatedController {
       if (!all_finite(b_.data(), N * K)) bad |= input::kActuation;
     if (bad != 0) return fail(out, Status::kNonFiniteInput, bad);
 
-    VectorP correction = VectorP::Zero();
-    bool corrected = false;  // some active row has stabilization or a robust term
-    for (int i = 0; i < P; ++i) {
-      if (RowLayout<M>::physical(i) || !active_[static_cast<std::size_t>(i)]) continue;
-      const auto k = static_cast<std::size_t>(i);
-      if (!row_gains_[k].enabled() && !row_robust_[k].enabled()) continue;
-      corrected = true;
-      correction(i) = row_correction(row_gains_[k], row_robust_[k], terms_.constraint_error(i),
-                                     terms_.constraint_error_rate(i));
-    }
+    VectorP correction;
+    const bool corrected = corrections(correction);
 
     // A = L L^T; a = A^-1 (Q - f); L^-1 B; C^T = L^-1 D^T.
     if (!factor_mass()) return fail(out, Status::kMassMatrixNotPositiveDefinite, 0);
@@ -601,21 +600,7 @@ class ActuatedController {
     }
     d.sigma_max = sigma_hi;
 
-    // Actuator limits: u and its parts scaled as a whole.
-    for (int i = 0; i < K; ++i) {
-      const Scalar magnitude = std::abs(out.control(i));
-      if (magnitude > limit_(i))
-        out.saturation_scale = std::min(out.saturation_scale, limit_(i) / magnitude);
-    }
-    if (out.saturation_scale < Scalar(1)) {
-      const Scalar k = out.saturation_scale;
-      out.control *= k;
-      out.control_closed_loop *= k;
-      out.control_feedforward *= k;
-      out.control_stabilizing *= k;
-      out.control = out.control.cwiseMax(-limit_).cwiseMin(limit_);
-      d.warnings |= warning::kSaturated;
-    }
+    saturate(out);
     if constexpr (ActuatedModel<M>) {
       out.force = b_ * out.control;
       out.closed_loop = b_ * out.control_closed_loop;
@@ -649,26 +634,115 @@ class ActuatedController {
         !small_dense::all_finite(out.acceleration.data(), N))
       return fail(out, Status::kNonFiniteResult, 0);
 
-    // Which rows are met: |D_i q'' - g_i| against the residual tolerance at the row's own scale.
+    judge_rows(terms_.constraint_rhs + correction, out, nullptr);
+    return d.status;
+  }
+
+  // Every row active, and Gauss's weight under the default or the SVD strategy (the ones whose
+  // answer is the Moore-Penrose one with the same tolerances): eq. (32) itself.
+  bool plain_case() const noexcept {
+    return gauss_weight_ && inactive_rows_ == 0 &&
+           (options_.solver.strategy == InverseStrategy::kCholeskyWithFallback ||
+            options_.solver.strategy == InverseStrategy::kSvd);
+  }
+
+  // A model without B or physical rows, in the plain case: u = Q' of eq. (32) (B = I and Gauss's
+  // weight W = A^-1 make the least-cost command the least-constraint force), computed by the plain
+  // law's solver, with this controller's limits, rows' judgement and reach history.
+  Status evaluate_plain(Output& out) noexcept {
+    if (!small_dense::all_finite(terms_.constraint_error.data(), P) ||
+        !small_dense::all_finite(terms_.constraint_error_rate.data(), P))
+      return fail(out, Status::kNonFiniteInput, input::kConstraintRhs);
+    VectorP correction;
+    const bool corrected = corrections(correction);
     const VectorP g = terms_.constraint_rhs + correction;
-    out.row_residual = terms_.constraint_matrix * out.acceleration - g;
-    const Scalar acceleration2 = out.acceleration.squaredNorm();
-    VectorP row_norm2 = VectorP::Zero();  // column by column: D is stored by columns
-    for (int c = 0; c < N; ++c)
-      for (int i = 0; i < P; ++i) row_norm2(i) += terms_.constraint_matrix(i, c) * terms_.constraint_matrix(i, c);
+    auto& solution = plain_solution_;
+    const Status status = plain_solver_.solve(terms_.mass_matrix, terms_.nonlinear_force, terms_.applied_force,
+                                              terms_.constraint_matrix, g, solution);
+    if (failed(status)) return fail(out, status, solution.diagnostics.non_finite_inputs);
+    SolveDiagnostics<Scalar>& d = out.diagnostics;
+    d = solution.diagnostics;
+    d.warnings &= ~warning::kConstraintsNotMet;  // judged row by row below
+    reach_seen_ = flag_vanishing_reach(options_.solver.vanishing_ratio, reach_seen_, d);
+    out.control = solution.constraint_force;
+    out.control_closed_loop = solution.force_from_impressed;
+    out.control_stabilizing = corrected ? plain_solver_.force_for_rhs(correction) : VectorN::Zero();
+    out.control_feedforward = solution.force_from_rhs - out.control_stabilizing;
+    saturate(out);
+    out.force = out.control;
+    out.closed_loop = out.control_closed_loop;
+    out.feedforward = out.control_feedforward;
+    out.stabilizing = out.control_stabilizing;
+    // q'' = a + A^-1 u is affine in u: scaling u scales q'' - a alike.
+    const VectorN& a = solution.unconstrained_acceleration;
+    out.acceleration = out.saturation_scale < Scalar(1)
+                           ? VectorN(a + out.saturation_scale * (solution.acceleration - a))
+                           : solution.acceleration;
+    // The solver's residual is the one of its own q'' (a scaled u moves it).
+    judge_rows(g, out, out.saturation_scale < Scalar(1) ? nullptr : &solution.residual);
+    return d.status;
+  }
+
+  // Baumgarte's correction and the robust term of every active task row; true when some row has
+  // either (else the correction is zero).
+  bool corrections(VectorP& correction) const noexcept {
+    correction.setZero();
+    bool corrected = false;
+    for (int i = 0; i < P; ++i) {
+      if (RowLayout<M>::physical(i) || !active_[static_cast<std::size_t>(i)]) continue;
+      const auto k = static_cast<std::size_t>(i);
+      if (!row_gains_[k].enabled() && !row_robust_[k].enabled()) continue;
+      corrected = true;
+      correction(i) = row_correction(row_gains_[k], row_robust_[k], terms_.constraint_error(i),
+                                     terms_.constraint_error_rate(i));
+    }
+    return corrected;
+  }
+
+  // Actuator limits: u and its parts scaled as a whole.
+  void saturate(Output& out) const noexcept {
+    for (int i = 0; i < K; ++i) {
+      const Scalar magnitude = std::abs(out.control(i));
+      if (magnitude > limit_(i))
+        out.saturation_scale = std::min(out.saturation_scale, limit_(i) / magnitude);
+    }
+    if (out.saturation_scale < Scalar(1)) {
+      const Scalar k = out.saturation_scale;
+      out.control *= k;
+      out.control_closed_loop *= k;
+      out.control_feedforward *= k;
+      out.control_stabilizing *= k;
+      out.control = out.control.cwiseMax(-limit_).cwiseMin(limit_);
+      out.diagnostics.warnings |= warning::kSaturated;
+    }
+  }
+
+  // Which rows are met: |D_i q'' - g_i| against the residual tolerance at the row's own scale
+  // (g stabilized); unmet_rows, the residual and kConstraintsNotMet. `residual`: D q'' - g and its
+  // norm in the diagnostics already, when the plain law's solver gave them for this q''.
+  void judge_rows(const VectorP& g, Output& out, const VectorP* residual) const noexcept {
+    SolveDiagnostics<Scalar>& d = out.diagnostics;
+    if (residual != nullptr)
+      out.row_residual = *residual;
+    else
+      out.row_residual = terms_.constraint_matrix * out.acceleration - g;
     const Scalar tol2 = options_.solver.residual_tolerance * options_.solver.residual_tolerance;
     Scalar residual2 = Scalar(0);
+    Scalar acceleration2 = Scalar(-1);  // |q''|^2, once a row needs it
     for (int i = 0; i < P; ++i) {
-      // Squared: |r_i|^2 <= tol^2 (g_i^2 + |D_i|^2 |q''|^2), false for NaN.
+      // Squared: |r_i|^2 <= tol^2 (g_i^2 + |D_i|^2 |q''|^2), false for NaN; the row's norm only
+      // when g_i alone does not settle it.
       const Scalar r2 = out.row_residual(i) * out.row_residual(i);
-      residual2 += r2;
-      const bool met = r2 <= tol2 * (g(i) * g(i) + row_norm2(i) * acceleration2);
+      if (residual == nullptr) residual2 += r2;
+      if (r2 <= tol2 * (g(i) * g(i))) continue;
+      if (acceleration2 < Scalar(0)) acceleration2 = out.acceleration.squaredNorm();
+      const bool met = r2 <= tol2 * (g(i) * g(i) + terms_.constraint_matrix.row(i).squaredNorm() * acceleration2);
       if (!met && i < 64 && active_[static_cast<std::size_t>(i)])
         out.unmet_rows |= std::uint64_t{1} << i;
     }
-    d.residual_norm = std::isfinite(residual2) ? std::sqrt(residual2) : out.row_residual.norm();
+    if (residual == nullptr)
+      d.residual_norm = std::isfinite(residual2) ? std::sqrt(residual2) : out.row_residual.norm();
     if (out.unmet_rows != 0) d.warnings |= warning::kConstraintsNotMet;
-    return d.status;
   }
 
   // A = L L^T: Cholesky, or square roots of a declared-diagonal A (read on its diagonal only).
@@ -743,8 +817,25 @@ class ActuatedController {
 #endif
   }
 
+  // A model without B and without physical rows has a plain case (plain_case): its solver, kept
+  // only for such a model.
+  static constexpr bool kHasPlainCase = !ActuatedModel<M> && kPhysical == 0;
+  struct NoPlainCase {
+    explicit NoPlainCase(const SolverOptions<Scalar>&) noexcept {}
+  };
+  using PlainSolver =
+      std::conditional_t<kHasPlainCase, ConstraintSolver<N, P, Scalar, kMassMatrixOf<M>>, NoPlainCase>;
+  using PlainSolution = std::conditional_t<kHasPlainCase, ConstraintSolution<N, P, Scalar>, NoPlainCase*>;
+  // The reach's history is this controller's, over both of its paths.
+  static SolverOptions<Scalar> plain_solver_options(SolverOptions<Scalar> options) noexcept {
+    options.vanishing_ratio = Scalar(0);
+    return options;
+  }
+
   M model_;
   Options options_;
+  PlainSolver plain_solver_;
+  PlainSolution plain_solution_{};
   std::array<Stabilization<Scalar>, static_cast<std::size_t>(P)> row_gains_{};
   std::array<Robust<Scalar>, static_cast<std::size_t>(P)> row_robust_{};
   VectorK limit_ = VectorK::Constant(std::numeric_limits<Scalar>::infinity());
@@ -768,6 +859,7 @@ class ActuatedController {
   Scalar reach_seen_ = Scalar(0);  ///< the largest reach computed (kVanishingReach)
   /// Rows switched on (physical rows stay true: they are always held).
   std::array<bool, static_cast<std::size_t>(P)> active_ = all_active();
+  int inactive_rows_ = 0;  ///< task rows switched off
   static constexpr std::array<bool, static_cast<std::size_t>(P)> all_active() noexcept {
     std::array<bool, static_cast<std::size_t>(P)> a{};
     for (bool& b : a) b = true;

@@ -154,6 +154,7 @@ struct ConstraintSolution {
   VectorN force_from_impressed = VectorN::Zero();        ///< (I - A X A^-1)(f - Q)    [N]
   VectorN force_from_rhs = VectorN::Zero();              ///< A (I - X) D^- g          [N]
   VectorN unconstrained_acceleration = VectorN::Zero();  ///< a = A^-1 (Q - f)         [m/s^2]
+  Eigen::Matrix<Scalar, P, 1> residual = Eigen::Matrix<Scalar, P, 1>::Zero();  ///< D q'' - g, row by row
   SolveDiagnostics<Scalar> diagnostics;
 };
 
@@ -312,7 +313,7 @@ class ConstraintSolver {
     using small_dense::squared_norm;
     SolveDiagnostics<Scalar>& diag = out.diagnostics;
     // Squared norms: one square root (the reported residual), none for the scale.
-    VectorP residual;
+    VectorP& residual = out.residual;
     if constexpr (kSupports) {
       // Row i of D q'' over the coordinates the row can touch (D^T's column, kept with its support).
       for (int i = 0; i < P; ++i)
@@ -442,6 +443,7 @@ class ConstraintSolver {
     out.force_from_impressed = zero;
     out.force_from_rhs = zero;
     out.unconstrained_acceleration = zero;
+    out.residual.setZero();
     // Only the status and the named inputs describe a failed call; the rest is reset.
     const std::uint32_t bad = out.diagnostics.non_finite_inputs;
     out.diagnostics = SolveDiagnostics<Scalar>{};
