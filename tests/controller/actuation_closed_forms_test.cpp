@@ -179,6 +179,21 @@ TEST(Actuation, WithoutBThePlainCaseFlagsAVanishingReach) {
   EXPECT_TRUE(out.diagnostics.has(warning::kVanishingReach));
 }
 
+// More rows than coordinates without B: no plain case (eq. 32's solver needs P <= N); the general
+// path answers in the least-squares sense and names the rows it misses.
+TEST(Actuation, WithoutBMoreRowsThanCoordinatesTakeTheGeneralPath) {
+  GivenUnactuated<2, 3> sys;
+  sys.D << 1, 0, 0, 1, 1, 1;
+  sys.g << 1, 1, 1;  // x'' = y'' = 1 leaves x'' + y'' = 2, not 1
+  ActuatedController<GivenUnactuated<2, 3>> c(sys);
+  ActuatedController<GivenUnactuated<2, 3>>::Output out;
+  ASSERT_EQ(c.compute(Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), 0.0, out), Status::kOk);
+  EXPECT_EQ(out.diagnostics.rank, 2);
+  EXPECT_TRUE(out.diagnostics.has(warning::kConstraintsNotMet));
+  EXPECT_NE(out.unmet_rows, 0u);
+  EXPECT_TRUE(near(out.acceleration, Eigen::Vector2d(out.force), 1e-12, 1.0, "q'' = u with A = I, f = Q = 0"));
+}
+
 TEST(Actuation, ANonFiniteActuationIsRefusedWithZeroOutputs) {
   GivenSystem<2, 1, 1> sys;
   sys.D << 1, -1;

@@ -41,8 +41,10 @@
 //   Status::kWeightNotPositiveDefinite.
 // - A given weight W = Lw Lw^T (set_weight): U is replaced by L^-1 B Lw^-T and R^-1 by Lw^-T.
 // - Without B and with Gauss's weight, W^(1/2) = L^-1: the task matrix is C_c itself and
-//   u = L x. Without physical rows too, every row active, under the default or the SVD strategy,
-//   that is eq. (32) (the plain case): the plain law's own solver (ConstraintSolver) answers it.
+//   u = L x. Without physical rows too, every row active, no more rows than coordinates, under
+//   the default or the SVD strategy, that is eq. (32) (the plain case): the plain law's own solver
+//   (ConstraintSolver) answers it, and its diagnostics are the plain law's (the reach, the
+//   condition estimate and the rank relative to sigma_max of D A^(-1/2)).
 // The task's pseudo-inverse: under the default strategy (kCholeskyWithFallback) its normal
 // equations T^T (T T^T)^-1 when every task row is active and the Cholesky factor of T T^T shows T
 // of full row rank, well conditioned and above the floor, as the plain law answers eq. (32);
@@ -817,9 +819,10 @@ class ActuatedController {
 #endif
   }
 
-  // A model without B and without physical rows has a plain case (plain_case): its solver, kept
-  // only for such a model.
-  static constexpr bool kHasPlainCase = !ActuatedModel<M> && kPhysical == 0;
+  // A model without B and without physical rows, and with no more rows than coordinates (more
+  // are necessarily redundant: the general path answers them in the least-squares sense), has a
+  // plain case (plain_case): its solver, kept only for such a model.
+  static constexpr bool kHasPlainCase = !ActuatedModel<M> && kPhysical == 0 && P <= N;
   struct NoPlainCase {
     explicit NoPlainCase(const SolverOptions<Scalar>&) noexcept {}
   };

@@ -57,8 +57,8 @@ inline constexpr std::uint32_t kSaturated = 1u << 5;
 /// with a sampled-data hold, the law could not be evaluated at the predicted state (a non-finite
 /// prediction, a failed solve there): the force is the law's at the measured state, held.
 inline constexpr std::uint32_t kHoldAtMeasuredState = 1u << 6;
-/// the largest singular value of D A^(-1/2) (the rows' reach; for ActuatedController the Frobenius
-/// norm of its active task rows' D A^(-1/2)) fell below
+/// the largest singular value of D A^(-1/2) (the rows' reach; for ActuatedController outside its
+/// plain case the Frobenius norm of its active task rows' D A^(-1/2)) fell below
 /// `SolverOptions::vanishing_ratio` times the largest this solver or controller has computed: the
 /// rows' gradient is vanishing as a whole (a one-row constraint at a point where its gradient is
 /// zero), so the force grows like 1 / reach. The rank tolerance and the condition estimate, both
