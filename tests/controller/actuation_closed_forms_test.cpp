@@ -166,6 +166,53 @@ TEST(Actuation, WithoutBThePlainCaseIsTheGeneralPathUnderGausssWeight) {
   }
 }
 
+// The plain case's diagnostics are the plain law's, where the general path measures the reach by
+// the rows' Frobenius norm: two unit rows on unit masses have singular values 1 and 1, so that the
+// SVD gives the plain law a condition estimate of 1 and the general path sqrt(2) (the Frobenius
+// reach over the smallest; the general path answers under the complete-orthogonal strategy by
+// its SVD). A row switched off and on again in between changes nothing.
+TEST(Actuation, WithoutBThePlainCaseReportsThePlainLawsDiagnostics) {
+  using S = GivenUnactuated<3, 2>;
+  S sys;
+  sys.D << 1, 0, 0, 0, 1, 0;
+  sys.g << 1, -1;
+  sys.f << 0.5, 0.25, 2;
+  ControllerOptions<double> svd, cod;
+  svd.solver.strategy = InverseStrategy::kSvd;
+  cod.solver.strategy = InverseStrategy::kCompleteOrthogonal;
+  ActuatedController<S> c(sys, svd), general(sys, cod);
+  TrackingController<S> plain_law(sys, svd);
+  ActuatedController<S>::Output out, by_general;
+  TrackingController<S>::Output law;
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  ASSERT_TRUE(c.set_row_active(1, false));
+  ASSERT_TRUE(c.set_row_active(1, true));
+  ASSERT_EQ(c.compute(zero, zero, 0.0, out), Status::kOk);
+  ASSERT_EQ(general.compute(zero, zero, 0.0, by_general), Status::kOk);
+  ASSERT_EQ(plain_law.compute(zero, zero, 0.0, law), Status::kOk);
+  EXPECT_EQ(out.force, law.force);
+  EXPECT_EQ(out.acceleration, law.acceleration);
+  EXPECT_EQ(out.diagnostics.sigma_max, law.diagnostics.sigma_max);
+  EXPECT_EQ(out.diagnostics.condition_estimate, law.diagnostics.condition_estimate);
+  EXPECT_NEAR(out.diagnostics.condition_estimate, 1.0, 1e-12);
+  EXPECT_NEAR(by_general.diagnostics.condition_estimate, std::sqrt(2.0), 1e-12);
+  EXPECT_TRUE(near(by_general.force, law.force, 1e-12, 1.0, "force"));
+}
+
+// A non-finite row error (which eq. (32)'s solver does not read) is refused as the general path
+// refuses it, with every non-finite input named.
+TEST(Actuation, WithoutBANonFiniteRowErrorIsRefusedWithEveryBadInputNamed) {
+  RandomSource<double> rng(31);
+  GivenUnactuated<3, 1> sys = GivenUnactuated<3, 1>::random(rng);
+  sys.e(0) = std::numeric_limits<double>::quiet_NaN();
+  sys.f(1) = std::numeric_limits<double>::infinity();
+  ActuatedController<GivenUnactuated<3, 1>> c(sys);
+  ActuatedController<GivenUnactuated<3, 1>>::Output out;
+  EXPECT_EQ(c.compute(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 0.0, out), Status::kNonFiniteInput);
+  EXPECT_EQ(out.diagnostics.non_finite_inputs, input::kConstraintRhs | input::kNonlinearForce);
+  EXPECT_TRUE(out.control.isZero(0));
+}
+
 // The plain case keeps the controller's own history of the rows' reach (kVanishingReach), so
 // that a reach a billion times below the largest seen is flagged.
 TEST(Actuation, WithoutBThePlainCaseFlagsAVanishingReach) {

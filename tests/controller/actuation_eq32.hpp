@@ -65,7 +65,11 @@ void expect_equal_to_eq32(const M& model, const char* name) {
       ASSERT_EQ(bare.compute(q, qd, t, got_bare), Status::kOk) << name;
       EXPECT_LT(relative_gap(got_bare.force, expected.force), 1e-9)
           << name << ", " << strategy << ", no B";
+      EXPECT_LT(relative_gap(got_bare.closed_loop, expected.closed_loop), 1e-9)
+          << name << ", " << strategy;
       EXPECT_LT(relative_gap(got_bare.feedforward, expected.feedforward), 1e-9)
+          << name << ", " << strategy;
+      EXPECT_LT(relative_gap(got_bare.stabilizing, expected.stabilizing), 1e-9)
           << name << ", " << strategy;
       EXPECT_LT(relative_gap(got_bare.acceleration, expected.acceleration), 1e-9)
           << name << ", " << strategy;

@@ -57,6 +57,7 @@ struct GivenUnactuated {
   Eigen::Matrix<double, N, 1> f = Eigen::Matrix<double, N, 1>::Zero(), Q = Eigen::Matrix<double, N, 1>::Zero();
   Eigen::Matrix<double, P, N> D = Eigen::Matrix<double, P, N>::Zero();
   Eigen::Matrix<double, P, 1> g = Eigen::Matrix<double, P, 1>::Zero();
+  Eigen::Matrix<double, P, 1> e = Eigen::Matrix<double, P, 1>::Zero();  ///< the rows' errors
   void evaluate(const Eigen::Matrix<double, N, 1>&, const Eigen::Matrix<double, N, 1>&, double,
                 ModelTerms<N, P, double>& terms) const noexcept {
     terms.mass_matrix = A;
@@ -64,6 +65,7 @@ struct GivenUnactuated {
     terms.applied_force = Q;
     terms.constraint_matrix = D;
     terms.constraint_rhs = g;
+    terms.constraint_error = e;
   }
   static GivenUnactuated random(RandomSource<double>& rng) {
     GivenUnactuated s;

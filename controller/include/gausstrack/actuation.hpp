@@ -297,8 +297,12 @@ class ActuatedController {
     if constexpr (ActuatedModel<M>) model_.actuation(qv, t, b_);  // else B = I, set once
     out.constraint_error = terms_.constraint_error;
     out.constraint_error_rate = terms_.constraint_error_rate;
+    // A non-finite e or e' (which the plain law's solver does not read) goes the general way, which
+    // names every non-finite input.
     if constexpr (kHasPlainCase)
-      if (plain_case()) return evaluate_plain(out);
+      if (plain_case() && small_dense::all_finite(terms_.constraint_error.data(), P) &&
+          small_dense::all_finite(terms_.constraint_error_rate.data(), P))
+        return evaluate_plain(out);
     out.diagnostics = SolveDiagnostics<Scalar>{};
     using small_dense::all_finite;
     std::uint32_t bad = 0;
@@ -652,9 +656,6 @@ class ActuatedController {
   // weight W = A^-1 make the least-cost command the least-constraint force), computed by the plain
   // law's solver, with this controller's limits, rows' judgement and reach history.
   Status evaluate_plain(Output& out) noexcept {
-    if (!small_dense::all_finite(terms_.constraint_error.data(), P) ||
-        !small_dense::all_finite(terms_.constraint_error_rate.data(), P))
-      return fail(out, Status::kNonFiniteInput, input::kConstraintRhs);
     VectorP correction;
     const bool corrected = corrections(correction);
     const VectorP g = terms_.constraint_rhs + correction;
