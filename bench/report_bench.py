@@ -354,8 +354,9 @@ def actuation(b):
            "well conditioned, its SVD otherwise) beside `TrackingController` on the same model with every "
            "coordinate actuated, and beside the same problem solved as one dynamic-size KKT system "
            "(`dynamic_kkt_control`: least u^T W u over q'', u and the physical reactions), all factoring A on "
-           "every call. `<model>_no_b`: a model that declares no B, controlled through B = I (target: at most "
-           "1.05x the plain law). `drive_2_of_3_no_slip`: the differential drive, its no-slip row held by the "
+           "every call. `<model>_no_b`: a model that declares no B, controlled through B = I: the actuated law's "
+           "plain case, eq. (32) by the plain law's own solver, with u beside B u and the rows judged one by one "
+           "(target: at most 1.05x the plain law). `drive_2_of_3_no_slip`: the differential drive, its no-slip row held by the "
            "ground.", "",
            "| case | actuated | plain law, every coordinate | actuated / plain | KKT (dynamic LU) | KKT / actuated | target |",
            "|---|---|---|---|---|---|---|"]
