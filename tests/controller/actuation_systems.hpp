@@ -13,41 +13,8 @@
 
 namespace gausstrack::test {
 
-// A system given by its terms: A, f, Q, D, g and B fixed (the model ignores the state).
-template <int N, int P, int K>
-struct GivenSystem {
-  using Scalar = double;
-  static constexpr int kDof = N;
-  static constexpr int kConstraints = P;
-  static constexpr int kActuators = K;
-  Eigen::Matrix<double, N, N> A = Eigen::Matrix<double, N, N>::Identity();
-  Eigen::Matrix<double, N, 1> f = Eigen::Matrix<double, N, 1>::Zero(), Q = Eigen::Matrix<double, N, 1>::Zero();
-  Eigen::Matrix<double, P, N> D = Eigen::Matrix<double, P, N>::Zero();
-  Eigen::Matrix<double, P, 1> g = Eigen::Matrix<double, P, 1>::Zero();
-  Eigen::Matrix<double, N, K> B = Eigen::Matrix<double, N, K>::Zero();
-  void evaluate(const Eigen::Matrix<double, N, 1>&, const Eigen::Matrix<double, N, 1>&, double,
-                ModelTerms<N, P, double>& terms) const noexcept {
-    terms.mass_matrix = A;
-    terms.nonlinear_force = f;
-    terms.applied_force = Q;
-    terms.constraint_matrix = D;
-    terms.constraint_rhs = g;
-  }
-  void actuation(const Eigen::Matrix<double, N, 1>&, double, Eigen::Matrix<double, N, K>& b) const noexcept { b = B; }
-
-  static GivenSystem random(RandomSource<double>& rng) {
-    GivenSystem s;
-    s.A = rng.spd<N>(100.0, 2.0);
-    s.f = rng.matrix<N, 1>();
-    s.Q = rng.matrix<N, 1>();
-    s.D = rng.matrix<P, N>();
-    s.g = rng.matrix<P, 1>();
-    s.B = rng.matrix<N, K>();
-    return s;
-  }
-};
-
-// The same without B: every coordinate actuated (B = I).
+// A system given by its terms: A, f, Q, D, g (and e) fixed, the model ignoring the state; no B:
+// every coordinate actuated (B = I).
 template <int N, int P>
 struct GivenUnactuated {
   using Scalar = double;
@@ -74,6 +41,21 @@ struct GivenUnactuated {
     s.Q = rng.matrix<N, 1>();
     s.D = rng.matrix<P, N>();
     s.g = rng.matrix<P, 1>();
+    return s;
+  }
+};
+
+// The same with B fixed: K actuators.
+template <int N, int P, int K>
+struct GivenSystem : GivenUnactuated<N, P> {
+  static constexpr int kActuators = K;
+  Eigen::Matrix<double, N, K> B = Eigen::Matrix<double, N, K>::Zero();
+  void actuation(const Eigen::Matrix<double, N, 1>&, double, Eigen::Matrix<double, N, K>& b) const noexcept { b = B; }
+
+  static GivenSystem random(RandomSource<double>& rng) {
+    GivenSystem s;
+    static_cast<GivenUnactuated<N, P>&>(s) = GivenUnactuated<N, P>::random(rng);
+    s.B = rng.matrix<N, K>();
     return s;
   }
 };
