@@ -223,7 +223,7 @@ def phases(b, models):
     out = ["", "### The general case's solve taken apart", "",
            "Each kernel of the refactoring path alone (`phase/*`, the law's own kernels on the benchmark "
            "states' terms, each input copied in first): Cholesky of A (N^3/3 flops), B^T = L^-1 D^T "
-           "(N^2 P), the Gram matrix B B^T (N P (P + 1), its lower triangle), its Cholesky (P^3/3) and the "
+           "with u = L^-1 (Q - f) beside it, one substitution (N^2 (P + 1)), the Gram matrix B B^T (N P (P + 1), its lower triangle), its Cholesky (P^3/3) and the "
            "inverse factor the condition bound needs (P^3/3); with P = 1 the law takes a scalar path "
            "instead of the last two (shown as -). `rest` is the general row's solve (row less "
            "`model_terms`) less the kernels it runs: the right-hand sides and their triangular solves, the "
@@ -265,10 +265,10 @@ def size_of(m):
 
 def kernel_flops(k, n, p):
     """Flops of one kernel of the general case's solve, as the table above counts them; `rest`: the
-    right-hand sides and products (a = A^-1 (Q - f), D a, G^-1 on two right sides, B^T w, L y, L^-T,
-    the residual D q''): about 5 N^2 + 8 N P + 4 P^2."""
-    return {"mass_cholesky": n ** 3 / 3, "constraint_solve": n * n * p, "gram": n * p * (p + 1),
-            "gram_cholesky": p ** 3 / 3, "gram_inverse": p ** 3 / 3, "rest": 5 * n * n + 8 * n * p + 4 * p * p,
+    right-hand sides and products (D a = B u, G^-1 on two right sides, D^T w for both parts, B^T w,
+    L^-T on two columns for a and q'', the residual D q''): about 2 N^2 + 10 N P + 4 P^2."""
+    return {"mass_cholesky": n ** 3 / 3, "constraint_solve": n * n * (p + 1), "gram": n * p * (p + 1),
+            "gram_cholesky": p ** 3 / 3, "gram_inverse": p ** 3 / 3, "rest": 2 * n * n + 10 * n * p + 4 * p * p,
             "kkt_lu": 2 * (n + p) ** 3 / 3}[k]
 
 
@@ -276,7 +276,7 @@ def flop_rates(t, phased, kernels):
     """Each kernel's flop rate beside the KKT LU's, and where the general target is missed, the kernel
     that holds the most time (the one at fault) with its rate."""
     out = ["", "Flop rates of the same kernels (GFlop/s: the kernel's flop count over its time; `rest` from "
-           "its count 5 N^2 + 8 N P + 4 P^2 over its time), beside the KKT LU's. The general case needs about "
+           "its count 2 N^2 + 10 N P + 4 P^2 over its time), beside the KKT LU's. The general case needs about "
            "half the KKT's flops (N^3/3 + N^2 P + N P^2 + 2 P^3/3 against 2 (N + P)^3/3), so it is 2x faster "
            "only where its kernels run at the LU's rate and the model's terms are small beside both.", "",
            "| system | " + " | ".join(kernels) + " | rest | kkt_lu | general / KKT (row) | kernel at fault |",

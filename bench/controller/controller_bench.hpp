@@ -8,8 +8,9 @@
 //   dynamic_kkt    the KKT system [A D^T; D 0] [q''; -lambda] = [Q - f; g] solved by a
 //                  dynamic-size LU, Q' = A q'' + f - Q;
 //   plain_fixed    the general case's mathematics on the law's own kernels (small_dense.hpp)
-//                  with no checks and no diagnostics: Cholesky of A, B^T = L^-1 D^T, Cholesky
-//                  of B B^T applied by two triangular solves, both parts of eq. (32) and q''; the
+//                  with no checks and no diagnostics: Cholesky of A, B^T = L^-1 D^T with
+//                  L^-1 (Q - f) beside it, Cholesky of B B^T applied by two triangular solves,
+//                  both parts of eq. (32) and q'' (checked against the law's first); the
 //                  floor the checks and diagnostics are measured against (law/<m>/
 //                  cholesky_dense_refactor, or cholesky_refactor for a dense model);
 //   model_terms    the model's terms A, f, Q, D, g alone (one evaluate_model, as every row
@@ -177,43 +178,83 @@ void bench_dynamic_kkt(benchmark::State& state) {
   });
 }
 
+/// plain_fixed's solve for the terms t: the two parts of eq. (32) (y's columns) and q''.
+template <typename M>
+[[gnu::always_inline]] inline void plain_fixed_solve(const TermsOf<M>& t, Eigen::Matrix<double, M::kDof, 2>& y,
+                                                     Eigen::Matrix<double, M::kDof, 1>& qdd) noexcept {
+  constexpr int N = M::kDof, P = M::kConstraints;
+  // The law's kernels (small_dense) and its order of work with none of its checks: no
+  // finiteness tests, no condition bound (so no L_G^-1: the Gram matrix is applied by two
+  // triangular solves), no residual. As the law does, u = L^-1 (Q - f) rides along B^T's
+  // solve, and B^T's solve and the Gram matrix skip what D's rows leave exactly zero.
+  Eigen::Matrix<double, N, N> l = t.mass_matrix;
+  Eigen::Matrix<double, N, 1> reciprocal;  // 1 / L_kk
+  small_dense::cholesky_in_place(l, reciprocal.data());
+  Eigen::Matrix<double, N, P> dt = t.constraint_matrix.transpose();
+  Eigen::Matrix<double, N, 1> u = t.applied_force - t.nonlinear_force;
+  // Where D's rows can be nonzero (D^T's columns), and B^T's columns below them; u's is dense.
+  int first[P + 1], d_end[P], bt_end[P];
+  small_dense::column_supports(dt, first, d_end);
+  first[P] = 0;
+  for (int c = 0; c < P; ++c) bt_end[c] = d_end[c];
+  small_dense::fill_in_below<N>(bt_end, P);
+  const bool supports = N > 8;  // as the law: above 8 coordinates
+  const int* from = supports ? first : nullptr;
+  Eigen::Matrix<double, N, P> bt = dt;
+  double* columns[P + 1];
+  for (int c = 0; c < P; ++c) columns[c] = bt.data() + c * N;
+  columns[P] = u.data();
+  small_dense::solve_lower_columns<P + 1>(l, reciprocal.data(), columns, from);
+  Eigen::Matrix<double, P, P> gram;
+  small_dense::gram(bt, gram, from, supports ? bt_end : nullptr);
+  small_dense::cholesky_in_place(gram);
+  Eigen::Matrix<double, P, 2> w;  // the multipliers of -D a = -B u and of g
+  for (int i = 0; i < P; ++i) {
+    const int lo = supports ? first[i] : 0, hi = supports ? bt_end[i] : N;
+    w(i, 0) = -small_dense::dot(bt.data() + i * N + lo, u.data() + lo, hi - lo);
+    w(i, 1) = t.constraint_rhs(i);
+  }
+  small_dense::solve_lower_in_place(gram, w);
+  small_dense::solve_lower_transposed_in_place(gram, w);
+  // The two parts of eq. (32), D^T w.
+  small_dense::multiply_columns(dt, w.data(), y.data(), from, d_end);
+  small_dense::multiply_columns(dt, w.data() + P, y.data() + N, from, d_end);
+  const Eigen::Matrix<double, P, 1> w_sum = w.col(0) + w.col(1);
+  Eigen::Matrix<double, N, 2> z;  // [u, u + B^T (w_0 + w_1)], then L^-T of both: [a, q'']
+  small_dense::multiply_columns(bt, w_sum.data(), z.data() + N, from, bt_end);
+  z.col(0) = u;
+  z.col(1) += u;
+  small_dense::solve_lower_transposed_in_place(l, reciprocal.data(), z);
+  qdd = z.col(1);
+}
+
 template <typename M>
 void bench_plain_fixed(benchmark::State& state) {
   static const States<M> s;
   const M model{};
-  constexpr int N = M::kDof, P = M::kConstraints;
+  constexpr int N = M::kDof;
+  Eigen::Matrix<double, N, 2> y;
+  Eigen::Matrix<double, N, 1> qdd;
+  // The floor computes what the law computes: both parts and q'' at every state, to rounding.
+  TrackingController<M> law(model);
+  typename TrackingController<M>::Output out;
+  for (std::size_t k = 0; k < States<M>::kCount; ++k) {
+    TermsOf<M> t;
+    evaluate_model(model, s.q[k], s.qd[k], s.t[k], t);
+    plain_fixed_solve<M>(t, y, qdd);
+    law.compute(s.q[k], s.qd[k], s.t[k], out);
+    const auto close = [](const auto& x, const auto& ref) {
+      return (x - ref).norm() <= 1e-9 * (1 + ref.norm());
+    };
+    if (!close(y.col(0), out.closed_loop) || !close(y.col(1), out.feedforward) || !close(qdd, out.acceleration)) {
+      state.SkipWithError("plain_fixed and the law disagree");
+      return;
+    }
+  }
   measure(state, [&](std::size_t k) {
     TermsOf<M> t;
     evaluate_model(model, s.q[k], s.qd[k], s.t[k], t);
-    // The law's kernels (small_dense) with none of its checks: no finiteness tests, no condition
-    // bound (so no L_G^-1: the Gram matrix is applied by two triangular solves), no residual. As
-    // the law does, B^T's solve and the Gram matrix skip what D's rows leave exactly zero.
-    Eigen::Matrix<double, N, N> l = t.mass_matrix;
-    Eigen::Matrix<double, N, 1> reciprocal;  // 1 / L_kk
-    small_dense::cholesky_in_place(l, reciprocal.data());
-    Eigen::Matrix<double, N, 1> a = t.applied_force - t.nonlinear_force;
-    small_dense::solve_lower_in_place(l, reciprocal.data(), a);
-    small_dense::solve_lower_transposed_in_place(l, reciprocal.data(), a);
-    Eigen::Matrix<double, N, P> bt = t.constraint_matrix.transpose();
-    int first[P], end[P];  // where D's rows can be nonzero, and B^T's columns below them
-    small_dense::column_supports(bt, first, end);
-    small_dense::fill_in_below<N>(end, P);
-    const bool supports = N > 8;  // as the law: above 8 coordinates
-    small_dense::solve_lower_in_place(l, reciprocal.data(), bt, supports ? first : nullptr);  // B^T = L^-1 D^T
-    Eigen::Matrix<double, P, P> gram;
-    small_dense::gram(bt, gram, supports ? first : nullptr, supports ? end : nullptr);
-    small_dense::cholesky_in_place(gram);
-    Eigen::Matrix<double, P, 2> w;
-    w.col(0).noalias() = -(t.constraint_matrix.lazyProduct(a));
-    w.col(1) = t.constraint_rhs;
-    small_dense::solve_lower_in_place(gram, w);
-    small_dense::solve_lower_transposed_in_place(gram, w);
-    Eigen::Matrix<double, N, 2> y;
-    y.noalias() = bt.lazyProduct(w);
-    Eigen::Matrix<double, N, 1> dq = y.col(0) + y.col(1);
-    small_dense::multiply_lower_in_place(l, y);  // the two parts of eq. (32)
-    small_dense::solve_lower_transposed_in_place(l, dq);
-    const Eigen::Matrix<double, N, 1> qdd = a + dq;
+    plain_fixed_solve<M>(t, y, qdd);
     benchmark::DoNotOptimize(y.data());
     benchmark::DoNotOptimize(qdd.data());
   });
@@ -243,7 +284,8 @@ void bench_phase(benchmark::State& state, Phase phase) {
     Eigen::Matrix<double, N, N> a, l;                // A and its factor
     Eigen::Matrix<double, N, 1> reciprocal;          // 1 / L_kk
     Eigen::Matrix<double, N, P> dt, bt;              // D^T and B^T = L^-1 D^T
-    int first[P], end[P];  // B^T's columns' supports (used above 8 coordinates, as the law does)
+    Eigen::Matrix<double, N, 1> r;                   // Q - f
+    int first[P + 1], end[P];  // B^T's columns' supports (used above 8 coordinates, as the law does), r's
     Eigen::Matrix<double, P, P> gram, gram_l;        // B B^T and its factor
     Eigen::MatrixXd kkt;                             // [A D^T; D 0]
   };
@@ -260,6 +302,8 @@ void bench_phase(benchmark::State& state, Phase phase) {
       in.dt = m.D.transpose();
       small_dense::column_supports(in.dt, in.first, in.end);
       small_dense::fill_in_below<N>(in.end, P);
+      in.first[P] = 0;
+      in.r = m.Q - m.f;
       in.bt = in.dt;
       small_dense::solve_lower_in_place(in.l, in.reciprocal.data(), in.bt);
       in.gram.noalias() = in.bt.transpose().lazyProduct(in.bt);
@@ -274,6 +318,7 @@ void bench_phase(benchmark::State& state, Phase phase) {
   }();
   Eigen::Matrix<double, N, N> l;
   Eigen::Matrix<double, N, P> bt;
+  Eigen::Matrix<double, N, 1> u;
   Eigen::Matrix<double, P, P> g, g_inv;
   measure(state, [&](std::size_t k) {
     const Inputs& in = inputs[k];
@@ -283,11 +328,17 @@ void bench_phase(benchmark::State& state, Phase phase) {
         benchmark::DoNotOptimize(small_dense::cholesky_in_place(l));
         benchmark::DoNotOptimize(l.data());
         break;
-      case Phase::kConstraintSolve:
+      case Phase::kConstraintSolve: {  // B^T = L^-1 D^T and u = L^-1 (Q - f), one substitution
         bt = in.dt;
-        small_dense::solve_lower_in_place(in.l, in.reciprocal.data(), bt, N > 8 ? in.first : nullptr);
+        u = in.r;
+        double* columns[P + 1];
+        for (int c = 0; c < P; ++c) columns[c] = bt.data() + c * N;
+        columns[P] = u.data();
+        small_dense::solve_lower_columns<P + 1>(in.l, in.reciprocal.data(), columns, N > 8 ? in.first : nullptr);
         benchmark::DoNotOptimize(bt.data());
+        benchmark::DoNotOptimize(u.data());
         break;
+      }
       case Phase::kGram:
         small_dense::gram(in.bt, g, N > 8 ? in.first : nullptr, N > 8 ? in.end : nullptr);
         benchmark::DoNotOptimize(g.data());

@@ -222,16 +222,17 @@ class ConstraintSolver {
                      Solution& out) noexcept {
     ready_ = false;
     out.diagnostics = SolveDiagnostics<Scalar>{};
-    if (const Status s = check_and_factor(A, f, Q, D, g, out); failed(s)) return s;
-    out.diagnostics = factor_diagnostics_;
-
     // u = L^-1 (Q - f), so that a = A^-1 (Q - f) = L^-T u and D a = B u: the right sides of the
     // two eq. (32) terms, -D a and g, solved together, take -D a as a product with B^T (kept
     // with the factors), and a and q'' = a + L^-T y = L^-T (u + y) are one back substitution on
-    // two columns side by side.
+    // two columns side by side. A new factorization solves for u beside D^T (set_bt); a kept one
+    // solves for it alone.
     VectorN u;
     for (int i = 0; i < N; ++i) u(i) = Q(i) - f(i);
-    solve_l_in_place(u);
+    bool solved = false;
+    if (const Status s = check_and_factor(A, f, Q, D, g, out, u, solved); failed(s)) return s;
+    if (!solved) solve_l_in_place(u);
+    out.diagnostics = factor_diagnostics_;
     Eigen::Matrix<Scalar, P, 2> rhs;
     for (int i = 0; i < P; ++i) {  // -(B u)_i = -(D a)_i over B^T's column's support
       const int from = kSupports ? bt_first_[i] : 0, to = kSupports ? bt_end_[i] : N;
@@ -273,9 +274,10 @@ class ConstraintSolver {
   }
 
   // The inputs' checks, then the factorizations of A and of the constraint rows, unless A and D
-  // equal the factored ones (which are finite and need no new factorization).
+  // equal the factored ones (which are finite and need no new factorization). A new factorization
+  // also makes u (Q - f on entry) L^-1 u and sets `solved`.
   Status check_and_factor(const MatrixNN& A, const VectorN& f, const VectorN& Q, const MatrixPN& D,
-                          const VectorP& g, Solution& out) noexcept {
+                          const VectorP& g, Solution& out, VectorN& u, bool& solved) noexcept {
     using small_dense::all_finite;
     const bool same_mass = factored_ && options_.reuse_factorization && mass_equals(A);
     const bool same_factors = same_mass && small_dense::all_equal(D.data(), d_key_.data(), P * N);
@@ -299,7 +301,8 @@ class ConstraintSolver {
     if (same_factors) return Status::kOk;
     if (!same_mass && !factor_mass(A)) return fail(out, Status::kMassMatrixNotPositiveDefinite);
     if (options_.reuse_factorization) d_key_ = D;  // only compared when kept
-    set_bt();  // B^T = L^-1 D^T
+    set_bt(u);  // B^T = L^-1 D^T, u = L^-1 u
+    solved = true;
     factor_diagnostics_ = SolveDiagnostics<Scalar>{};
     // B or its factors overflowed (entries near the range limit): nothing below could be
     // trusted, and a factorization of non-finite numbers is not kept.
@@ -387,9 +390,11 @@ class ConstraintSolver {
     d_norm2_ = small_dense::squared_norm(dt_.data(), N * P);
     if constexpr (kSupports) small_dense::column_supports(dt_, d_first_, d_end_);
   }
-  // B^T = L^-1 D^T. Its columns' supports: D's rows' with a diagonal L; from the same first row
-  // to the last with a dense one (the substitution fills in below).
-  void set_bt() noexcept {
+  // B^T = L^-1 D^T, and u = L^-1 u. Its columns' supports: D's rows' with a diagonal L; from the
+  // same first row to the last with a dense one (the substitution fills in below). With a dense L,
+  // u is one more column of the same forward substitution: its dependent chain, a one-vector
+  // solve's whole cost, runs beside D^T's columns instead of after them.
+  void set_bt(VectorN& u) noexcept {
     if constexpr (kSupports) {
       for (int i = 0; i < P; ++i) {
         bt_first_[i] = d_first_[i];
@@ -399,16 +404,28 @@ class ConstraintSolver {
     }
     if constexpr (kMass == MassMatrix::kDiagonal) {
       bt_.noalias() = inverse_sqrt_mass_.asDiagonal() * dt_;  // Eigen's vectorized product
+      solve_l_in_place(u);
     } else {
       bt_ = dt_;
-      small_dense::solve_lower_in_place(mass_l_, mass_reciprocal_.data(), bt_, kSupports ? bt_first_ : nullptr);
+      Scalar* columns[P + 1];
+      int first[P + 1];
+      for (int i = 0; i < P; ++i) {
+        columns[i] = bt_.data() + i * N;
+        first[i] = kSupports ? bt_first_[i] : 0;
+      }
+      columns[P] = u.data();
+      first[P] = 0;
+      small_dense::solve_lower_columns<P + 1>(mass_l_, mass_reciprocal_.data(), columns, kSupports ? first : nullptr);
     }
   }
-  void solve_l_in_place(VectorN& x) const noexcept {  // x = L^-1 x
+  // x = L^-1 x for u alone (a kept factorization): by the path set_bt solves it on beside D^T,
+  // so that a kept factorization answers bit for bit as a new one.
+  void solve_l_in_place(VectorN& x) const noexcept {
     if constexpr (kMass == MassMatrix::kDiagonal) {
       for (int i = 0; i < N; ++i) x(i) *= inverse_sqrt_mass_(i);
     } else {
-      small_dense::solve_lower_in_place(mass_l_, mass_reciprocal_.data(), x);
+      Scalar* column[1] = {x.data()};
+      small_dense::solve_lower_columns<1, (P + 1 > 2)>(mass_l_, mass_reciprocal_.data(), column);
     }
   }
   template <int K>
@@ -645,21 +662,9 @@ class ConstraintSolver {
     }
   }
 
-  // out = M x for an N x P factor M, down its columns (their supports [first[j], end[j]) above
-  // kDenseUpTo coordinates).
+  // out = M x for an N x P factor M (supports above kDenseUpTo coordinates).
   static void times(const MatrixNP& m, const int* first, const int* end, const Scalar* x, Scalar* out) noexcept {
-    if constexpr (kSupports) {
-      for (int i = 0; i < N; ++i) out[i] = Scalar(0);
-      for (int j = 0; j < P; ++j) {
-        const Scalar xj = x[j];
-        const Scalar* mj = m.data() + j * N;
-        for (int i = first[j]; i < end[j]; ++i) out[i] += mj[i] * xj;
-      }
-    } else {
-      for (int i = 0; i < N; ++i) out[i] = m(i, 0) * x[0];
-      for (int j = 1; j < P; ++j)
-        for (int i = 0; i < N; ++i) out[i] += m(i, j) * x[j];
-    }
+    small_dense::multiply_columns(m, x, out, kSupports ? first : nullptr, end);
   }
 
   // apply_pseudo_inverse with the SVD or the complete orthogonal decomposition: force = L y.

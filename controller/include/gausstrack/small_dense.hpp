@@ -303,6 +303,25 @@ void column_supports(const Eigen::Matrix<Scalar, N, K>& x, int* first, int* end)
   }
 }
 
+/// out = M x for the N x K matrix M, down its columns. With supports (column_supports), column j
+/// only over its rows [first[j], end[j]).
+template <typename Scalar, int N, int K>
+void multiply_columns(const Eigen::Matrix<Scalar, N, K>& m, const Scalar* x, Scalar* out,
+                      const int* first = nullptr, const int* end = nullptr) noexcept {
+  if (first != nullptr) {
+    for (int i = 0; i < N; ++i) out[i] = Scalar(0);
+    for (int j = 0; j < K; ++j) {
+      const Scalar xj = x[j];
+      const Scalar* mj = m.data() + j * N;
+      for (int i = first[j]; i < end[j]; ++i) out[i] += mj[i] * xj;
+    }
+  } else {
+    for (int i = 0; i < N; ++i) out[i] = m(i, 0) * x[0];
+    for (int j = 1; j < K; ++j)
+      for (int i = 0; i < N; ++i) out[i] += m(i, j) * x[j];
+  }
+}
+
 /// The supports of L^-1 x for a dense lower-triangular L from x's (column_supports): a column keeps
 /// its first row and, unless it is zero, fills in down to the last row.
 template <int N>
@@ -310,21 +329,23 @@ void fill_in_below(int* end, int columns) noexcept {
   for (int c = 0; c < columns; ++c) end[c] = end[c] == 0 ? 0 : N;
 }
 
-/// x = L^-1 x for every column of x (forward substitution, column-oriented), reciprocal[k] =
-/// 1 / L_kk. With `first` (see column_supports), column c is known to be zero above row
-/// first[c], and so is its answer: its steps start there.
-template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
-void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* reciprocal,
-                          Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x,
-                          const int* first = nullptr) noexcept {
-  static_assert(N == 1 || K == 1 || !(Options & Eigen::RowMajor), "column-major right sides");
+/// x_c = L^-1 x_c for the kColumns columns of N entries at columns[c] (forward substitution,
+/// column-oriented), reciprocal[k] = 1 / L_kk. With `first` (see column_supports), column c is
+/// known to be zero above row first[c], and so is its answer: its steps start there. The columns
+/// need not be one matrix's: a right side solved beside a matrix's columns shares their steps,
+/// its dependent chain hidden among theirs. kPairs selects the path (one step at a time for one or
+/// two columns, two at a time for more); each column's arithmetic depends on the path alone, so a
+/// column solved alone by the path of a wider call gets that call's answer bit for bit.
+template <int kColumns, bool kPairs = (kColumns > 2), typename Scalar, int N>
+void solve_lower_columns(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* reciprocal, Scalar* const* columns,
+                         const int* first = nullptr) noexcept {
   const Scalar* a = l.data();
-  if constexpr (K <= 2) {
+  if constexpr (!kPairs) {
     for (int k = 0; k < N; ++k) {  // step k for every column: independent chains side by side
       const Scalar* ck = a + k * N;
-      for (int c = 0; c < K; ++c) {
+      for (int c = 0; c < kColumns; ++c) {
         if (first != nullptr && k < first[c]) continue;
-        Scalar* xc = x.data() + c * N;
+        Scalar* xc = columns[c];
         const Scalar v = xc[k] * reciprocal[k];
         xc[k] = v;
         update_from_even(k + 1, N, [&](int i) { xc[i] -= ck[i] * v; });
@@ -339,9 +360,9 @@ void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* re
     for (; k + 1 < N; k += 2) {
       const Scalar* c0 = a + k * N;
       const Scalar* c1 = c0 + N;
-      for (int c = 0; c < K; ++c) {
+      for (int c = 0; c < kColumns; ++c) {
         if (first != nullptr && k < first[c]) continue;  // first[c] is even
-        Scalar* xc = x.data() + c * N;
+        Scalar* xc = columns[c];
         const Scalar v0 = xc[k] * reciprocal[k];
         const Scalar v1 = (xc[k + 1] - c0[k + 1] * v0) * reciprocal[k + 1];
         xc[k] = v0;
@@ -350,8 +371,19 @@ void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* re
       }
     }
     if (k < N)  // N odd: the last row
-      for (int c = 0; c < K; ++c) x.data()[c * N + k] *= reciprocal[k];
+      for (int c = 0; c < kColumns; ++c) columns[c][k] *= reciprocal[k];
   }
+}
+
+/// x = L^-1 x for every column of x (solve_lower_columns).
+template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
+void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* reciprocal,
+                          Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x,
+                          const int* first = nullptr) noexcept {
+  static_assert(N == 1 || K == 1 || !(Options & Eigen::RowMajor), "column-major right sides");
+  Scalar* columns[K];
+  for (int c = 0; c < K; ++c) columns[c] = x.data() + c * N;
+  solve_lower_columns<K>(l, reciprocal, columns, first);
 }
 
 template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
