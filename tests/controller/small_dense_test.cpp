@@ -207,6 +207,7 @@ TEST(SmallDense, SupportsSkipOnlyZeros) {
   expect_supports_skip_only_zeros<9, 5>(902);
   expect_supports_skip_only_zeros<16, 8>(903);
   expect_supports_skip_only_zeros<5, 2>(904);  // the one- and two-column path
+  expect_supports_skip_only_zeros<6, 1>(905);  // one column, and two with the right side beside it
 }
 
 }  // namespace

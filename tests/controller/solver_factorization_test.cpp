@@ -61,7 +61,7 @@ void expect_identical(const ConstraintSolution<N, P>& a, const ConstraintSolutio
 // Expectation: a solver that kept its factorization from an earlier call answers bit for bit as a
 // fresh solver does, whether A, D or neither changed (by as little as one ulp in one entry), for
 // every strategy, and keeps reporting the factorization's diagnostics (here the fallback to the
-// SVD for nearly dependent rows). At 6 coordinates with dense rows, and at 12 with rows touching
+// SVD for nearly dependent rows). At 6 and 7 coordinates with dense rows, and at 12 with rows touching
 // three coordinates each (the solver then keeps each row's support with D: the residual and the
 // products run over it).
 template <int N, int P>
@@ -101,6 +101,7 @@ void expect_kept_factorization_answers_as_a_fresh_solver(unsigned seed, bool ban
 
 TEST(Reuse, KeptFactorizationAnswersAsAFreshSolver) {
   expect_kept_factorization_answers_as_a_fresh_solver<6, 3>(21, false);
+  expect_kept_factorization_answers_as_a_fresh_solver<7, 3>(23, false);  // N odd: the last row alone
   expect_kept_factorization_answers_as_a_fresh_solver<12, 5>(25, true);
 }
 

@@ -55,6 +55,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
 #include "gausstrack/mass_matrix.hpp"
 #include "gausstrack/rank_revealing.hpp"
@@ -225,14 +226,20 @@ class ConstraintSolver {
     // u = L^-1 (Q - f), so that a = A^-1 (Q - f) = L^-T u and D a = B u: the right sides of the
     // two eq. (32) terms, -D a and g, solved together, take -D a as a product with B^T (kept
     // with the factors), and a and q'' = a + L^-T y = L^-T (u + y) are one back substitution on
-    // two columns side by side. A new factorization solves for u beside D^T (set_bt); a kept one
-    // solves for it alone.
-    VectorN u;
-    for (int i = 0; i < N; ++i) u(i) = Q(i) - f(i);
-    bool solved = false;
-    if (const Status s = check_and_factor(A, f, Q, D, g, out, u, solved); failed(s)) return s;
-    if (!solved) solve_l_in_place(u);
+    // two columns side by side. A new dense factorization has solved for u beside D^T (set_bt); a
+    // kept one, or a diagonal L, solves for it here.
+    if (const Status s = check_and_factor(A, f, Q, D, g, out); failed(s)) return s;
     out.diagnostics = factor_diagnostics_;
+    VectorN u;
+    bool solved = false;
+    if constexpr (kMass != MassMatrix::kDiagonal) {
+      solved = fresh_.solved;
+      if (solved) u = fresh_.u;
+    }
+    if (!solved) {
+      for (int i = 0; i < N; ++i) u(i) = Q(i) - f(i);
+      solve_l_in_place(u);
+    }
     Eigen::Matrix<Scalar, P, 2> rhs;
     for (int i = 0; i < P; ++i) {  // -(B u)_i = -(D a)_i over B^T's column's support
       const int from = kSupports ? bt_first_[i] : 0, to = kSupports ? bt_end_[i] : N;
@@ -274,11 +281,12 @@ class ConstraintSolver {
   }
 
   // The inputs' checks, then the factorizations of A and of the constraint rows, unless A and D
-  // equal the factored ones (which are finite and need no new factorization). A new factorization
-  // also makes u (Q - f on entry) L^-1 u and sets `solved`.
+  // equal the factored ones (which are finite and need no new factorization). A new dense
+  // factorization also solves for u = L^-1 (Q - f) (fresh_).
   Status check_and_factor(const MatrixNN& A, const VectorN& f, const VectorN& Q, const MatrixPN& D,
-                          const VectorP& g, Solution& out, VectorN& u, bool& solved) noexcept {
+                          const VectorP& g, Solution& out) noexcept {
     using small_dense::all_finite;
+    if constexpr (kMass != MassMatrix::kDiagonal) fresh_.solved = false;
     const bool same_mass = factored_ && options_.reuse_factorization && mass_equals(A);
     const bool same_factors = same_mass && small_dense::all_equal(D.data(), d_key_.data(), P * N);
     // A new D is read once: into D^T (kept) with its squared norm, which is finite only when every
@@ -301,8 +309,7 @@ class ConstraintSolver {
     if (same_factors) return Status::kOk;
     if (!same_mass && !factor_mass(A)) return fail(out, Status::kMassMatrixNotPositiveDefinite);
     if (options_.reuse_factorization) d_key_ = D;  // only compared when kept
-    set_bt(u);  // B^T = L^-1 D^T, u = L^-1 u
-    solved = true;
+    set_bt(f, Q);  // B^T = L^-1 D^T, and with a dense L u = L^-1 (Q - f)
     factor_diagnostics_ = SolveDiagnostics<Scalar>{};
     // B or its factors overflowed (entries near the range limit): nothing below could be
     // trusted, and a factorization of non-finite numbers is not kept.
@@ -390,11 +397,11 @@ class ConstraintSolver {
     d_norm2_ = small_dense::squared_norm(dt_.data(), N * P);
     if constexpr (kSupports) small_dense::column_supports(dt_, d_first_, d_end_);
   }
-  // B^T = L^-1 D^T, and u = L^-1 u. Its columns' supports: D's rows' with a diagonal L; from the
-  // same first row to the last with a dense one (the substitution fills in below). With a dense L,
-  // u is one more column of the same forward substitution: its dependent chain, a one-vector
-  // solve's whole cost, runs beside D^T's columns instead of after them.
-  void set_bt(VectorN& u) noexcept {
+  // B^T = L^-1 D^T. Its columns' supports: D's rows' with a diagonal L; from the same first row
+  // to the last with a dense one (the substitution fills in below). With a dense L, u = L^-1 (Q -
+  // f) is one more column of the same forward substitution (fresh_): its dependent chain, a
+  // one-vector solve's whole cost, runs beside D^T's columns instead of after them.
+  void set_bt(const VectorN& f, const VectorN& Q) noexcept {
     if constexpr (kSupports) {
       for (int i = 0; i < P; ++i) {
         bt_first_[i] = d_first_[i];
@@ -404,22 +411,24 @@ class ConstraintSolver {
     }
     if constexpr (kMass == MassMatrix::kDiagonal) {
       bt_.noalias() = inverse_sqrt_mass_.asDiagonal() * dt_;  // Eigen's vectorized product
-      solve_l_in_place(u);
     } else {
       bt_ = dt_;
+      for (int i = 0; i < N; ++i) fresh_.u(i) = Q(i) - f(i);
       Scalar* columns[P + 1];
       int first[P + 1];
       for (int i = 0; i < P; ++i) {
         columns[i] = bt_.data() + i * N;
         first[i] = kSupports ? bt_first_[i] : 0;
       }
-      columns[P] = u.data();
+      columns[P] = fresh_.u.data();
       first[P] = 0;
       small_dense::solve_lower_columns<P + 1>(mass_l_, mass_reciprocal_.data(), columns, kSupports ? first : nullptr);
+      fresh_.solved = true;
     }
   }
-  // x = L^-1 x for u alone (a kept factorization): by the path set_bt solves it on beside D^T,
-  // so that a kept factorization answers bit for bit as a new one.
+  // x = L^-1 x for u when set_bt has not solved it (a kept factorization, or a diagonal L): by the
+  // path set_bt solves it on beside D^T, so that a kept factorization answers bit for bit as a new
+  // one.
   void solve_l_in_place(VectorN& x) const noexcept {
     if constexpr (kMass == MassMatrix::kDiagonal) {
       for (int i = 0; i < N; ++i) x(i) *= inverse_sqrt_mass_(i);
@@ -664,7 +673,7 @@ class ConstraintSolver {
 
   // out = M x for an N x P factor M (supports above kDenseUpTo coordinates).
   static void times(const MatrixNP& m, const int* first, const int* end, const Scalar* x, Scalar* out) noexcept {
-    small_dense::multiply_columns(m, x, out, kSupports ? first : nullptr, end);
+    small_dense::multiply_columns<kSupports>(m, x, out, first, end);
   }
 
   // apply_pseudo_inverse with the SVD or the complete orthogonal decomposition: force = L y.
@@ -736,6 +745,13 @@ class ConstraintSolver {
   Scalar svd_damping2_ = Scalar(0);  // lambda^2 when kDampedLeastSquares fell back to the SVD
   small_dense::CompleteOrthogonal<Scalar, P, N> cod_{};  // B Pi = Q [S^T 0; 0 0] Z^T (kCompleteOrthogonal)
   InverseStrategy used_ = InverseStrategy::kCholeskyWithFallback;
+  // u = L^-1 (Q - f) when this call factored a dense A or D anew (set_bt); nothing with a diagonal L.
+  struct FreshRightSide {
+    VectorN u = VectorN::Zero();
+    bool solved = false;
+  };
+  struct NoRightSide {};
+  [[no_unique_address]] std::conditional_t<kMass == MassMatrix::kDiagonal, NoRightSide, FreshRightSide> fresh_{};
   int rank_ = 0;
   bool ready_ = false;
 };

@@ -303,12 +303,12 @@ void column_supports(const Eigen::Matrix<Scalar, N, K>& x, int* first, int* end)
   }
 }
 
-/// out = M x for the N x K matrix M, down its columns. With supports (column_supports), column j
+/// out = M x for the N x K matrix M, down its columns. With kSupports (column_supports), column j
 /// only over its rows [first[j], end[j]).
-template <typename Scalar, int N, int K>
+template <bool kSupports, typename Scalar, int N, int K>
 void multiply_columns(const Eigen::Matrix<Scalar, N, K>& m, const Scalar* x, Scalar* out,
                       const int* first = nullptr, const int* end = nullptr) noexcept {
-  if (first != nullptr) {
+  if constexpr (kSupports) {
     for (int i = 0; i < N; ++i) out[i] = Scalar(0);
     for (int j = 0; j < K; ++j) {
       const Scalar xj = x[j];
@@ -333,9 +333,10 @@ void fill_in_below(int* end, int columns) noexcept {
 /// column-oriented), reciprocal[k] = 1 / L_kk. With `first` (see column_supports), column c is
 /// known to be zero above row first[c], and so is its answer: its steps start there. The columns
 /// need not be one matrix's: a right side solved beside a matrix's columns shares their steps,
-/// its dependent chain hidden among theirs. kPairs selects the path (one step at a time for one or
-/// two columns, two at a time for more); each column's arithmetic depends on the path alone, so a
-/// column solved alone by the path of a wider call gets that call's answer bit for bit.
+/// its dependent chain hidden among theirs. kPairs selects the path (by default one step at a time
+/// for one or two columns, two at a time for more); each column's arithmetic is the same expressions
+/// on either path whatever the other columns, so a column solved alone by the path of a wider call
+/// gets that call's answer bit for bit (with the compiler contracting the same expressions alike).
 template <int kColumns, bool kPairs = (kColumns > 2), typename Scalar, int N>
 void solve_lower_columns(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* reciprocal, Scalar* const* columns,
                          const int* first = nullptr) noexcept {
@@ -352,10 +353,11 @@ void solve_lower_columns(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* rec
       }
     }
   } else {
-    // Many columns (B^T = L^-1 D^T): two steps at a time, the 2 x 2 diagonal block and then one
-    // rank-2 update of the rows below, so that each entry is loaded and stored once per two steps
-    // (one step at a time, the stores bound the loop). The other columns' work hides the
-    // store-forwarding stall that update_from_even avoids for one or two columns.
+    // Many columns (B^T = L^-1 D^T), or one solved by their path: two steps at a time, the 2 x 2
+    // diagonal block and then one rank-2 update of the rows below, so that each entry is loaded
+    // and stored once per two steps (one step at a time, the stores bound the loop). The other
+    // columns' work hides the store-forwarding stall that update_from_even avoids for one or two
+    // columns.
     int k = 0;
     for (; k + 1 < N; k += 2) {
       const Scalar* c0 = a + k * N;
