@@ -194,18 +194,14 @@ template <typename M>
   Eigen::Matrix<double, N, P> dt = t.constraint_matrix.transpose();
   Eigen::Matrix<double, N, 1> u = t.applied_force - t.nonlinear_force;
   // Where D's rows can be nonzero (D^T's columns), and B^T's columns below them; u's is dense.
-  int first[P + 1], d_end[P], bt_end[P];
+  int first[P], d_end[P], bt_end[P];
   small_dense::column_supports(dt, first, d_end);
-  first[P] = 0;
   for (int c = 0; c < P; ++c) bt_end[c] = d_end[c];
   small_dense::fill_in_below<N>(bt_end, P);
   constexpr bool supports = N > 8;  // as the law: above 8 coordinates
   const int* from = supports ? first : nullptr;
   Eigen::Matrix<double, N, P> bt = dt;
-  double* columns[P + 1];
-  for (int c = 0; c < P; ++c) columns[c] = bt.data() + c * N;
-  columns[P] = u.data();
-  small_dense::solve_lower_columns<P + 1>(l, reciprocal.data(), columns, from);
+  small_dense::solve_lower_in_place(l, reciprocal.data(), bt, u, from);
   Eigen::Matrix<double, P, 2> w;  // the multipliers of -D a = -B u and of g
   for (int i = 0; i < P; ++i) {
     const int lo = supports ? first[i] : 0, hi = supports ? bt_end[i] : N;
@@ -294,7 +290,7 @@ void bench_phase(benchmark::State& state, Phase phase) {
     Eigen::Matrix<double, N, 1> reciprocal;          // 1 / L_kk
     Eigen::Matrix<double, N, P> dt, bt;              // D^T and B^T = L^-1 D^T
     Eigen::Matrix<double, N, 1> r;                   // Q - f
-    int first[P + 1], end[P];  // B^T's columns' supports (used above 8 coordinates, as the law does), r's
+    int first[P], end[P];      // B^T's columns' supports (used above 8 coordinates, as the law does)
     Eigen::Matrix<double, P, P> gram, gram_l;        // B B^T and its factor
     Eigen::MatrixXd kkt;                             // [A D^T; D 0]
   };
@@ -311,7 +307,6 @@ void bench_phase(benchmark::State& state, Phase phase) {
       in.dt = m.D.transpose();
       small_dense::column_supports(in.dt, in.first, in.end);
       small_dense::fill_in_below<N>(in.end, P);
-      in.first[P] = 0;
       in.r = m.Q - m.f;
       in.bt = in.dt;
       small_dense::solve_lower_in_place(in.l, in.reciprocal.data(), in.bt);
@@ -340,10 +335,7 @@ void bench_phase(benchmark::State& state, Phase phase) {
       case Phase::kConstraintSolve: {  // B^T = L^-1 D^T and u = L^-1 (Q - f), one substitution
         bt = in.dt;
         u = in.r;
-        double* columns[P + 1];
-        for (int c = 0; c < P; ++c) columns[c] = bt.data() + c * N;
-        columns[P] = u.data();
-        small_dense::solve_lower_columns<P + 1>(in.l, in.reciprocal.data(), columns, N > 8 ? in.first : nullptr);
+        small_dense::solve_lower_in_place(in.l, in.reciprocal.data(), bt, u, N > 8 ? in.first : nullptr);
         benchmark::DoNotOptimize(bt.data());
         benchmark::DoNotOptimize(u.data());
         break;

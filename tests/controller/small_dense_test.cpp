@@ -176,23 +176,14 @@ void expect_supports_skip_only_zeros(unsigned seed) {
   Eigen::Matrix<double, N, 1> v;
   for (int i = 0; i < N; ++i) v(i) = u(rng);
   Eigen::Matrix<double, N, 1> v_apart = v;
-  double* columns[K + 1];
-  int columns_first[K + 1];
-  for (int c = 0; c < K; ++c) {
-    columns[c] = apart.data() + c * N;
-    columns_first[c] = first[c];
-  }
-  columns[K] = v_apart.data();
-  columns_first[K] = 0;
-  small_dense::solve_lower_columns<K + 1>(l, reciprocal, columns, columns_first);
+  small_dense::solve_lower_in_place(l, reciprocal, apart, v_apart, first);
   EXPECT_LE((apart - full).norm(), 1e-13 * full.norm()) << "N " << N << " K " << K;
   const Eigen::Matrix<double, N, 1> v_expected = l.template triangularView<Eigen::Lower>().solve(v);
   EXPECT_LE((v_apart - v_expected).norm(), 1e-13 * v_expected.norm()) << "N " << N << " K " << K;
   // Alone by the same path, the right side's answer is the same bit for bit (what lets a kept
   // factorization solve it alone and answer as a new one).
   Eigen::Matrix<double, N, 1> v_alone = v;
-  double* alone[1] = {v_alone.data()};
-  small_dense::solve_lower_columns<1, (K + 1 > 2)>(l, reciprocal, alone);
+  small_dense::solve_lower_columns<1, (K + 1 > 2)>(l, reciprocal, [&v_alone](int) { return v_alone.data(); });
   EXPECT_TRUE(v_alone == v_apart) << "N " << N << " K " << K;
   // The answer fills in below the band: its supports start where x's do and end at N.
   for (int c = 0; c < K; ++c) end[c] = end[c] == 0 ? 0 : N;

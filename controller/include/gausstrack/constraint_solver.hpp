@@ -414,15 +414,8 @@ class ConstraintSolver {
     } else {
       bt_ = dt_;
       for (int i = 0; i < N; ++i) fresh_.u(i) = Q(i) - f(i);
-      Scalar* columns[P + 1];
-      int first[P + 1];
-      for (int i = 0; i < P; ++i) {
-        columns[i] = bt_.data() + i * N;
-        first[i] = kSupports ? bt_first_[i] : 0;
-      }
-      columns[P] = fresh_.u.data();
-      first[P] = 0;
-      small_dense::solve_lower_columns<P + 1>(mass_l_, mass_reciprocal_.data(), columns, kSupports ? first : nullptr);
+      small_dense::solve_lower_in_place(mass_l_, mass_reciprocal_.data(), bt_, fresh_.u,
+                                        kSupports ? bt_first_ : nullptr);
       fresh_.solved = true;
     }
   }
@@ -433,8 +426,8 @@ class ConstraintSolver {
     if constexpr (kMass == MassMatrix::kDiagonal) {
       for (int i = 0; i < N; ++i) x(i) *= inverse_sqrt_mass_(i);
     } else {
-      Scalar* column[1] = {x.data()};
-      small_dense::solve_lower_columns<1, (P + 1 > 2)>(mass_l_, mass_reciprocal_.data(), column);
+      small_dense::solve_lower_columns<1, (P + 1 > 2)>(mass_l_, mass_reciprocal_.data(),
+                                                       [&x](int) { return x.data(); });
     }
   }
   template <int K>

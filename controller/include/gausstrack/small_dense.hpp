@@ -329,7 +329,7 @@ void fill_in_below(int* end, int columns) noexcept {
   for (int c = 0; c < columns; ++c) end[c] = end[c] == 0 ? 0 : N;
 }
 
-/// x_c = L^-1 x_c for the kColumns columns of N entries at columns[c] (forward substitution,
+/// x_c = L^-1 x_c for the kColumns columns of N entries at column(c) (forward substitution,
 /// column-oriented), reciprocal[k] = 1 / L_kk. With `first` (see column_supports), column c is
 /// known to be zero above row first[c], and so is its answer: its steps start there. The columns
 /// need not be one matrix's: a right side solved beside a matrix's columns shares their steps,
@@ -337,8 +337,8 @@ void fill_in_below(int* end, int columns) noexcept {
 /// for one or two columns, two at a time for more); each column's arithmetic is the same expressions
 /// on either path whatever the other columns, so a column solved alone by the path of a wider call
 /// gets that call's answer bit for bit (with the compiler contracting the same expressions alike).
-template <int kColumns, bool kPairs = (kColumns > 2), typename Scalar, int N>
-void solve_lower_columns(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* reciprocal, Scalar* const* columns,
+template <int kColumns, bool kPairs = (kColumns > 2), typename Scalar, int N, typename Column>
+void solve_lower_columns(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* reciprocal, Column column,
                          const int* first = nullptr) noexcept {
   const Scalar* a = l.data();
   if constexpr (!kPairs) {
@@ -346,7 +346,7 @@ void solve_lower_columns(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* rec
       const Scalar* ck = a + k * N;
       for (int c = 0; c < kColumns; ++c) {
         if (first != nullptr && k < first[c]) continue;
-        Scalar* xc = columns[c];
+        Scalar* xc = column(c);
         const Scalar v = xc[k] * reciprocal[k];
         xc[k] = v;
         update_from_even(k + 1, N, [&](int i) { xc[i] -= ck[i] * v; });
@@ -364,7 +364,7 @@ void solve_lower_columns(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* rec
       const Scalar* c1 = c0 + N;
       for (int c = 0; c < kColumns; ++c) {
         if (first != nullptr && k < first[c]) continue;  // first[c] is even
-        Scalar* xc = columns[c];
+        Scalar* xc = column(c);
         const Scalar v0 = xc[k] * reciprocal[k];
         const Scalar v1 = (xc[k + 1] - c0[k + 1] * v0) * reciprocal[k + 1];
         xc[k] = v0;
@@ -373,7 +373,7 @@ void solve_lower_columns(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* rec
       }
     }
     if (k < N)  // N odd: the last row
-      for (int c = 0; c < kColumns; ++c) columns[c][k] *= reciprocal[k];
+      for (int c = 0; c < kColumns; ++c) column(c)[k] *= reciprocal[k];
   }
 }
 
@@ -383,9 +383,27 @@ void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* re
                           Eigen::Matrix<Scalar, N, K, Options, MaxRows, MaxCols>& x,
                           const int* first = nullptr) noexcept {
   static_assert(N == 1 || K == 1 || !(Options & Eigen::RowMajor), "column-major right sides");
-  Scalar* columns[K];
-  for (int c = 0; c < K; ++c) columns[c] = x.data() + c * N;
-  solve_lower_columns<K>(l, reciprocal, columns, first);
+  solve_lower_columns<K>(l, reciprocal, [&x](int c) { return x.data() + c * N; }, first);
+}
+
+/// x = L^-1 x and r = L^-1 r in one substitution: r is one more column beside x's, its steps from
+/// row 0 (`first` describes x's columns alone). r's dependent chain, a one-vector solve's whole
+/// cost, runs beside x's columns instead of after them. solve_lower_columns<1, (K + 1 > 2)> on r
+/// alone takes the same path and gives r's answer bit for bit.
+template <typename Scalar, int N, int K>
+[[gnu::always_inline]] inline void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* reciprocal,
+                                                        Eigen::Matrix<Scalar, N, K>& x, Eigen::Matrix<Scalar, N, 1>& r,
+                          const int* first = nullptr) noexcept {
+  Scalar* columns[K + 1];
+  int from[K + 1];
+  for (int c = 0; c < K; ++c) {
+    columns[c] = x.data() + c * N;
+    from[c] = first != nullptr ? first[c] : 0;
+  }
+  columns[K] = r.data();
+  from[K] = 0;
+  solve_lower_columns<K + 1>(l, reciprocal, [&columns](int c) { return columns[c]; },
+                             first != nullptr ? from : nullptr);
 }
 
 template <typename Scalar, int N, int K, int Options, int MaxRows, int MaxCols>
