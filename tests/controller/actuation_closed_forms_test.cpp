@@ -34,6 +34,24 @@ TEST(Actuation, OneActuatorOnTheFirstMassOfTheDuffingPairIsTheClosedForm) {
   }
 }
 
+// The same unactuated row at a scale whose squares leave the range (g ~ 1e160, |r|^2 = Inf): still
+// named, and the met row still met; the residual's norm is the unmet row's.
+TEST(Actuation, AnUnactuatedRowIsNamedWhereItsSquaresOverflow) {
+  for (const double scale : {1.0, 1e160, 1e300}) {
+    GivenSystem<2, 2, 1> two;
+    two.D.setIdentity();
+    two.g << 0.7 * scale, -0.4 * scale;
+    two.B << 1, 0;
+    ActuatedController<GivenSystem<2, 2, 1>> c(two);
+    ActuatedController<GivenSystem<2, 2, 1>>::Output out;
+    ASSERT_EQ(c.compute(Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), 0.0, out), Status::kOk) << scale;
+    EXPECT_EQ(out.unmet_rows, 0b10u) << scale;
+    EXPECT_TRUE(out.diagnostics.has(warning::kConstraintsNotMet)) << scale;
+    EXPECT_NEAR(out.control(0), 0.7 * scale, 1e-15 * scale) << scale;
+    EXPECT_NEAR(out.diagnostics.residual_norm, 0.4 * scale, 1e-15 * scale) << scale;
+  }
+}
+
 // Closed forms: two independent unit masses tracked each, one actuator on the first: the second
 // row cannot be actuated (flagged alone) and the first is met exactly. Two actuators on one
 // coordinate with W = diag(w1, w2) share the force as 1 / w_i (Gauss's weight would be singular).

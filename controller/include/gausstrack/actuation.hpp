@@ -734,17 +734,30 @@ class ActuatedController {
     Scalar acceleration2 = Scalar(-1);  // |q''|^2, once a row needs it
     for (int i = 0; i < P; ++i) {
       // Squared: |r_i|^2 <= tol^2 (g_i^2 + |D_i|^2 |q''|^2), false for NaN; the row's norm only
-      // when g_i alone does not settle it.
+      // when g_i alone does not settle it. Squares beyond the range (from about 1e154) would pass
+      // any residual (Inf <= Inf): then the same test on norms taken without squaring.
       const Scalar r2 = out.row_residual(i) * out.row_residual(i);
       if (residual == nullptr) residual2 += r2;
-      if (r2 <= tol2 * (g(i) * g(i))) continue;
+      const Scalar g2 = g(i) * g(i);
+      if (r2 <= tol2 * g2 && g2 <= std::numeric_limits<Scalar>::max()) continue;
       if (acceleration2 < Scalar(0)) acceleration2 = out.acceleration.squaredNorm();
-      const bool met = r2 <= tol2 * (g(i) * g(i) + terms_.constraint_matrix.row(i).squaredNorm() * acceleration2);
+      const Scalar scale2 = g2 + terms_.constraint_matrix.row(i).squaredNorm() * acceleration2;
+      bool met;
+      if (std::isfinite(r2) && std::isfinite(scale2)) {
+        met = r2 <= tol2 * scale2;
+      } else {
+        Scalar row[N];
+        for (int j = 0; j < N; ++j) row[j] = terms_.constraint_matrix(i, j);
+        const Scalar scale = std::abs(g(i)) + small_dense::scaled_norm(row, N) *
+                                                  small_dense::scaled_norm(out.acceleration.data(), N);
+        met = std::abs(out.row_residual(i)) <= options_.solver.residual_tolerance * scale;
+      }
       if (!met && i < 64 && active_[static_cast<std::size_t>(i)])
         out.unmet_rows |= std::uint64_t{1} << i;
     }
     if (residual == nullptr)
-      d.residual_norm = std::isfinite(residual2) ? std::sqrt(residual2) : out.row_residual.norm();
+      d.residual_norm = std::isfinite(residual2) ? std::sqrt(residual2)
+                                                 : small_dense::scaled_norm(out.row_residual.data(), P);
     if (out.unmet_rows != 0) d.warnings |= warning::kConstraintsNotMet;
   }
 
