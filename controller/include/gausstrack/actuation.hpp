@@ -742,16 +742,9 @@ class ActuatedController {
       if (r2 <= tol2 * g2 && g2 <= std::numeric_limits<Scalar>::max()) continue;
       if (acceleration2 < Scalar(0)) acceleration2 = out.acceleration.squaredNorm();
       const Scalar scale2 = g2 + terms_.constraint_matrix.row(i).squaredNorm() * acceleration2;
-      bool met;
-      if (std::isfinite(r2) && std::isfinite(scale2)) {
-        met = r2 <= tol2 * scale2;
-      } else {
-        Scalar row[N];
-        for (int j = 0; j < N; ++j) row[j] = terms_.constraint_matrix(i, j);
-        const Scalar scale = std::abs(g(i)) + small_dense::scaled_norm(row, N) *
-                                                  small_dense::scaled_norm(out.acceleration.data(), N);
-        met = std::abs(out.row_residual(i)) <= options_.solver.residual_tolerance * scale;
-      }
+      // (A residual whose square overflowed beside a finite scale is unmet, rightly.)
+      const bool met = scale2 <= std::numeric_limits<Scalar>::max() ? r2 <= tol2 * scale2
+                                                                   : met_unsquared(i, g(i), out);
       if (!met && i < 64 && active_[static_cast<std::size_t>(i)])
         out.unmet_rows |= std::uint64_t{1} << i;
     }
@@ -759,6 +752,16 @@ class ActuatedController {
       d.residual_norm = std::isfinite(residual2) ? std::sqrt(residual2)
                                                  : small_dense::scaled_norm(out.row_residual.data(), P);
     if (out.unmet_rows != 0) d.warnings |= warning::kConstraintsNotMet;
+  }
+
+  // Row i's test |r_i| <= tol (|g_i| + |D_i| |q''|) on norms taken without squaring (rare: kept
+  // out of the loop above).
+  [[gnu::noinline]] bool met_unsquared(int i, Scalar g_i, const Output& out) const noexcept {
+    Scalar row[N];
+    for (int j = 0; j < N; ++j) row[j] = terms_.constraint_matrix(i, j);
+    const Scalar scale =
+        std::abs(g_i) + small_dense::scaled_norm(row, N) * small_dense::scaled_norm(out.acceleration.data(), N);
+    return std::abs(out.row_residual(i)) <= options_.solver.residual_tolerance * scale;
   }
 
   // A = L L^T: Cholesky, or square roots of a declared-diagonal A (read on its diagonal only).
