@@ -393,7 +393,7 @@ void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* re
 template <typename Scalar, int N, int K>
 [[gnu::always_inline]] inline void solve_lower_in_place(const Eigen::Matrix<Scalar, N, N>& l, const Scalar* reciprocal,
                                                         Eigen::Matrix<Scalar, N, K>& x, Eigen::Matrix<Scalar, N, 1>& r,
-                          const int* first = nullptr) noexcept {
+                                                        const int* first = nullptr) noexcept {
   Scalar* columns[K + 1];
   int from[K + 1];
   for (int c = 0; c < K; ++c) {
