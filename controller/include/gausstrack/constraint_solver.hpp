@@ -195,10 +195,15 @@ class ConstraintSolver {
   /// Constrained accelerations (eq. 30), constraint force (eq. 32) and its two terms for
   /// A (N x N), f, Q (N), D (P x N), g (P). Returns the status also stored in
   /// out.diagnostics.status.
+  ///
+  /// The normal equations' path is compiled as one body (`flatten`: every kernel it calls is
+  /// inlined, so that no call boundary spills the small matrices or reloads the member state);
+  /// the rank-revealing factorizations, their application and the failure path stay out of line
+  /// (`noinline`), each dominated by its own work, so that the body stays small.
   template <typename DA, typename Df, typename DQ, typename DD, typename Dg>
-  Status solve(const Eigen::MatrixBase<DA>& A, const Eigen::MatrixBase<Df>& f,
-               const Eigen::MatrixBase<DQ>& Q, const Eigen::MatrixBase<DD>& D,
-               const Eigen::MatrixBase<Dg>& g, Solution& out) noexcept {
+  [[gnu::flatten]] Status solve(const Eigen::MatrixBase<DA>& A, const Eigen::MatrixBase<Df>& f,
+                                const Eigen::MatrixBase<DQ>& Q, const Eigen::MatrixBase<DD>& D,
+                                const Eigen::MatrixBase<Dg>& g, Solution& out) noexcept {
     // Plain matrices: references to the arguments when they are plain matrices already, else
     // their values. The work below runs on their contiguous storage.
     const MatrixNN& a_plain = A.derived();
@@ -450,12 +455,12 @@ class ConstraintSolver {
   }
 
   // |g| + |D| |q''| without squaring (for |D|^2 |q''|^2 beyond the range; rare, so not cached).
-  Scalar unsquared_scale(const VectorP& g, const VectorN& acceleration) const noexcept {
+  [[gnu::noinline]] Scalar unsquared_scale(const VectorP& g, const VectorN& acceleration) const noexcept {
     return small_dense::scaled_norm(g.data(), P) +
            small_dense::scaled_norm(dt_.data(), P * N) * small_dense::scaled_norm(acceleration.data(), N);
   }
 
-  Status fail(Solution& out, Status status) noexcept {
+  [[gnu::noinline]] Status fail(Solution& out, Status status) noexcept {
     const VectorN zero = VectorN::Zero();
     out.acceleration = zero;
     out.constraint_force = zero;
@@ -572,7 +577,7 @@ class ConstraintSolver {
   // One-sided Jacobi SVD of B^T = U S V^T (N x P), so B = V S U^T and B^+ = U S^+ V^T.
   // Both rank-revealing kernels refuse a non-finite B (L^-1 D^T overflowed). The normal equations
   // need no test: a non-finite B makes B B^T non-finite, which they refuse.
-  bool factorize_svd(SolveDiagnostics<Scalar>& diag) noexcept {
+  [[gnu::noinline]] bool factorize_svd(SolveDiagnostics<Scalar>& diag) noexcept {
     if (!small_dense::all_finite(bt_.data(), N * P)) return false;
     used_ = InverseStrategy::kSvd;
     svd_damping2_ = options_.strategy == InverseStrategy::kDampedLeastSquares ? options_.damping * options_.damping
@@ -591,7 +596,7 @@ class ConstraintSolver {
     return true;
   }
 
-  bool factorize_cod(SolveDiagnostics<Scalar>& diag) noexcept {
+  [[gnu::noinline]] bool factorize_cod(SolveDiagnostics<Scalar>& diag) noexcept {
     if (!small_dense::all_finite(bt_.data(), N * P)) return false;
     used_ = InverseStrategy::kCompleteOrthogonal;
     MatrixPN b;
@@ -671,8 +676,8 @@ class ConstraintSolver {
 
   // apply_pseudo_inverse with the SVD or the complete orthogonal decomposition: force = L y.
   template <int K>
-  void apply_rank_revealing(const Eigen::Matrix<Scalar, P, K>& r, Eigen::Matrix<Scalar, N, K>& force,
-                            VectorN* y_sum) const noexcept {
+  [[gnu::noinline]] void apply_rank_revealing(const Eigen::Matrix<Scalar, P, K>& r,
+                                               Eigen::Matrix<Scalar, N, K>& force, VectorN* y_sum) const noexcept {
     Eigen::Matrix<Scalar, N, K> y;
     switch (used_) {
       case InverseStrategy::kCholeskyWithFallback:
