@@ -287,8 +287,10 @@ class ActuatedController {
   }
 
  private:
-  // The actuated law at (q, q', t).
-  Status evaluate(const VectorN& qv, const VectorN& qdv, Scalar t, Output& out) noexcept {
+  // The actuated law at (q, q', t), compiled as one body (`flatten`, as the plain law's solve): its
+  // many small steps (the factors, the projections, the row judgement) are inlined instead of
+  // called, so that no call boundary spills the small matrices or reloads the member state.
+  [[gnu::flatten]] Status evaluate(const VectorN& qv, const VectorN& qdv, Scalar t, Output& out) noexcept {
     // Every vector of `out` is written below on success, and fail() resets them all: only what
     // accumulates starts afresh here.
     out.unmet_rows = 0;
