@@ -289,7 +289,10 @@ class ActuatedController {
  private:
   // The actuated law at (q, q', t), compiled as one body (`flatten`, as the plain law's solve): its
   // many small steps (the factors, the projections, the row judgement) are inlined instead of
-  // called, so that no call boundary spills the small matrices or reloads the member state.
+  // called, so that no call boundary spills the small matrices or reloads the member state. The
+  // body holds the path the model takes by default: the plain case when the model has one, else
+  // the general law. What is rarely taken or dominated by its own work stays out of line
+  // (`noinline`): the general law beside a plain case, the SVDs, fail().
   [[gnu::flatten]] Status evaluate(const VectorN& qv, const VectorN& qdv, Scalar t, Output& out) noexcept {
     // Every vector of `out` is written below on success, and fail() resets them all: only what
     // accumulates starts afresh here.
@@ -299,12 +302,25 @@ class ActuatedController {
     if constexpr (ActuatedModel<M>) model_.actuation(qv, t, b_);  // else B = I, set once
     out.constraint_error = terms_.constraint_error;
     out.constraint_error_rate = terms_.constraint_error_rate;
-    // A non-finite e or e' (which the plain law's solver does not read) goes the general way, which
-    // names every non-finite input.
-    if constexpr (kHasPlainCase)
+    if constexpr (kHasPlainCase) {
+      // A non-finite e or e' (which the plain law's solver does not read) goes the general way,
+      // which names every non-finite input.
       if (plain_case() && small_dense::all_finite(terms_.constraint_error.data(), P) &&
           small_dense::all_finite(terms_.constraint_error_rate.data(), P))
         return evaluate_plain(out);
+      return evaluate_general_out_of_line(out);
+    } else {
+      return evaluate_general(out);
+    }
+  }
+
+  [[gnu::noinline, gnu::flatten]] Status evaluate_general_out_of_line(Output& out) noexcept {
+    return evaluate_general(out);
+  }
+
+  // The general law on the model's terms (terms_, b_): u of least u^T W u whose B u meets the
+  // active task rows with the physical rows held.
+  Status evaluate_general(Output& out) noexcept {
     out.diagnostics = SolveDiagnostics<Scalar>{};
     using small_dense::all_finite;
     std::uint32_t bad = 0;
@@ -378,7 +394,7 @@ class ActuatedController {
         up.col(j) = ct.col(row);
         rp(j) = terms_.constraint_rhs(row) - terms_.constraint_matrix.row(row).dot(a);
       }
-      if (!small_dense::jacobi_svd_in_place(up.data(), N, kPhysical, sp.data(), vp.data()))
+      if (!thin_svd(up, sp, vp))
         return fail(out, Status::kNonFiniteResult, 0);
       const Scalar tol =
           (options_.solver.rank_tolerance > Scalar(0) ? options_.solver.rank_tolerance
@@ -516,7 +532,7 @@ class ActuatedController {
         w = task_t;
       else
         w = task_t.transpose();
-      if (!small_dense::jacobi_svd_in_place(w.data(), kRows, kCols, sigma.data(), v.data()))
+      if (!thin_svd(w, sigma, v))
         return fail(out, Status::kNonFiniteResult, 0);
       reach = gauss_weight_ ? std::max(sigma(0), unprojected) : sigma(0);
       const Scalar relative = relative_tolerance * reach;
@@ -819,7 +835,16 @@ class ActuatedController {
         x.col(c) -= physical_basis_.col(j) * physical_basis_.col(j).dot(x.col(c));
   }
 
-  static Status fail(Output& out, Status status, std::uint32_t inputs) noexcept {
+  // The thin SVD w = U diag(sigma) V^T in place (rows >= columns): dominated by its own work, so
+  // out of evaluate()'s body, and one body of its own at its compile-time sizes.
+  template <int Rows, int Cols>
+  [[gnu::noinline, gnu::flatten]] static bool thin_svd(Eigen::Matrix<Scalar, Rows, Cols>& w,
+                                                       Eigen::Matrix<Scalar, Cols, 1>& sigma,
+                                                       Eigen::Matrix<Scalar, Cols, Cols>& v) noexcept {
+    return small_dense::jacobi_svd_in_place(w.data(), Rows, Cols, sigma.data(), v.data());
+  }
+
+  [[gnu::noinline]] static Status fail(Output& out, Status status, std::uint32_t inputs) noexcept {
     const VectorP e = out.constraint_error, e_rate = out.constraint_error_rate;
     out = Output{};
     out.constraint_error = e;
