@@ -307,10 +307,8 @@ class TrackingController {
   }
 
  private:
-  // Eq. (32) at (q, q', t) with the stabilization and the force limit, compiled as one body
-  // (`flatten`): the model's terms and the solver's solve are inlined, so that no call boundary
-  // stands between the terms and the solve; the solver's rarely taken paths stay out of line.
-  [[gnu::flatten]] Status evaluate(const VectorN& qv, const VectorN& qdv, Scalar t, Output& out) noexcept {
+  // Eq. (32) at (q, q', t) with the stabilization and the force limit.
+  Status evaluate(const VectorN& qv, const VectorN& qdv, Scalar t, Output& out) noexcept {
     evaluate_model(model_, qv, qdv, t, terms_);
     out.constraint_error = terms_.constraint_error;
     out.constraint_error_rate = terms_.constraint_error_rate;
