@@ -314,6 +314,8 @@ class ActuatedController {
     }
   }
 
+  // evaluate_general as its own body, for a model with a plain case: the attribute cannot depend
+  // on the model, so the call site chooses between this and the inlined evaluate_general.
   [[gnu::noinline, gnu::flatten]] Status evaluate_general_out_of_line(Output& out) noexcept {
     return evaluate_general(out);
   }
@@ -394,7 +396,7 @@ class ActuatedController {
         up.col(j) = ct.col(row);
         rp(j) = terms_.constraint_rhs(row) - terms_.constraint_matrix.row(row).dot(a);
       }
-      if (!thin_svd(up, sp, vp))
+      if (!small_dense::jacobi_svd_fixed<N, kPhysical>(up.data(), sp.data(), vp.data()))
         return fail(out, Status::kNonFiniteResult, 0);
       const Scalar tol =
           (options_.solver.rank_tolerance > Scalar(0) ? options_.solver.rank_tolerance
@@ -532,7 +534,7 @@ class ActuatedController {
         w = task_t;
       else
         w = task_t.transpose();
-      if (!thin_svd(w, sigma, v))
+      if (!small_dense::jacobi_svd_fixed<kRows, kCols>(w.data(), sigma.data(), v.data()))
         return fail(out, Status::kNonFiniteResult, 0);
       reach = gauss_weight_ ? std::max(sigma(0), unprojected) : sigma(0);
       const Scalar relative = relative_tolerance * reach;
@@ -833,15 +835,6 @@ class ActuatedController {
     for (int c = 0; c < Cols; ++c)
       for (int j = 0; j < free_basis_rank_; ++j)
         x.col(c) -= physical_basis_.col(j) * physical_basis_.col(j).dot(x.col(c));
-  }
-
-  // The thin SVD w = U diag(sigma) V^T in place (rows >= columns): dominated by its own work, so
-  // out of evaluate()'s body, and one body of its own at its compile-time sizes.
-  template <int Rows, int Cols>
-  [[gnu::noinline, gnu::flatten]] static bool thin_svd(Eigen::Matrix<Scalar, Rows, Cols>& w,
-                                                       Eigen::Matrix<Scalar, Cols, 1>& sigma,
-                                                       Eigen::Matrix<Scalar, Cols, Cols>& v) noexcept {
-    return small_dense::jacobi_svd_in_place(w.data(), Rows, Cols, sigma.data(), v.data());
   }
 
   [[gnu::noinline]] static Status fail(Output& out, Status status, std::uint32_t inputs) noexcept {

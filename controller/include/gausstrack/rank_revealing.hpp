@@ -140,6 +140,15 @@ bool jacobi_svd_in_place(Scalar* w, int rows, int cols, Scalar* sigma, Scalar* v
   return true;
 }
 
+/// jacobi_svd_in_place at compile-time sizes, out of line: one body per size with every kernel
+/// inlined (the rotations' loops keep their constant bounds), called from a hot body that the SVD,
+/// dominated by its own work, would otherwise grow.
+template <int Rows, int Cols, typename Scalar>
+[[gnu::noinline, gnu::flatten]] bool jacobi_svd_fixed(Scalar* w, Scalar* sigma, Scalar* v) noexcept {
+  static_assert(Rows >= Cols, "the thin SVD needs rows >= columns");
+  return jacobi_svd_in_place(w, Rows, Cols, sigma, v);
+}
+
 /// Householder reflector H = I - tau u u^T with u = (1, x[1:]) that maps x (length n, in place) to
 /// (beta, 0, ..., 0): x[0] becomes beta and x[1:] the tail of u. tau = 0 (H = I) when x[1:] is 0.
 template <typename Scalar>
