@@ -50,6 +50,7 @@ def benchmarks(doc):
         counters = {k: median(x[k] for x in it)
                     for k in ("p50_ns", "p99_ns", "p999_ns", "max_ns", "allocs_per_call") if k in it[0]}
         counters["max_ns"] = max(x.get("max_ns", 0) for x in it)
+        counters["min_time_ns"] = min(x["real_time"] * scale for x in it)
         out[name] = (b["real_time"] * scale, counters)
     return out
 
@@ -124,6 +125,11 @@ def timed(b):
     return lambda key: b[key][0] if key in b else math.nan
 
 
+def fastest(b):
+    """Like timed, the fastest repetition instead of the median."""
+    return lambda key: b[key][1]["min_time_ns"] if key in b else math.nan
+
+
 def law_table(b, models):
     out = ["## Control law: one full evaluation (model terms + eq. 32)", "",
            "Time is Google Benchmark's median over repetitions; p50/p99/p99.9/max come from calls timed one by "
@@ -146,42 +152,50 @@ def law_table(b, models):
 
 
 def targets(b, models):
-    t = timed(b)
-    out = ["", "### Targets (ratios from this run)", "", "| target | system | measured | met |", "|---|---|---|---|"]
+    """Each target's ratio from the rows' medians (what `met` judges) and from their fastest
+    repetitions: on a shared machine whose speed moves between repetitions, the two ratios
+    differing says a verdict rests on the noise."""
+    t, fast = timed(b), fastest(b)
+    out = ["", "### Targets (ratios from this run)", "",
+           "`measured` is the ratio of the rows' medians, which `met` judges; `fastest` is the same ratio of "
+           "their fastest repetitions.", "",
+           "| target | system | measured | fastest | met |", "|---|---|---|---|---|"]
 
-    def target(label, m, value, ok):
-        out.append(f"| {label} | {m} | {value:.2f}x | {'yes' if ok else '**no**'} |")
+    def target(label, m, ratio, ok):
+        """ratio(times) for times = t or fast; ok(value) says whether the target is met."""
+        value = ratio(t)
+        out.append(f"| {label} | {m} | {value:.2f}x | {ratio(fast):.2f}x | {'yes' if ok(value) else '**no**'} |")
 
-    duffing = t("law/duffing_2x1/cholesky") / t("baseline/duffing_2x1/closed_form")
-    target("Duffing law <= 1.5x its closed form", "duffing_2x1", duffing, duffing <= 1.5)
+    at_most = lambda limit: (lambda v: v <= limit)
+    at_least = lambda limit: (lambda v: v >= limit)
+    target("Duffing law <= 1.5x its closed form", "duffing_2x1",
+           lambda x: x("law/duffing_2x1/cholesky") / x("baseline/duffing_2x1/closed_form"), at_most(1.5))
     for m in models:
         if math.isnan(t(f"law/{m}/cholesky")):
             continue  # a system with no law rows in this run (e.g. timed by the natural-form benchmarks only)
-        default, refactor = t(f"law/{m}/cholesky"), t(f"law/{m}/cholesky_refactor")
-        general = t(f"law/{m}/cholesky_dense_refactor")
-        declared = not math.isnan(general)
-        if not declared:
-            general = refactor
-        kkt = t(f"baseline/{m}/dynamic_kkt")
-        lit = t(f"baseline/{m}/literal_fixed") / default
-        dyn = t(f"baseline/{m}/dynamic_user") / default
-        target("general (dense A, factored every call) >= 2x faster than dynamic KKT LU", m, kkt / general,
-               kkt / general >= 2)
+        declared = not math.isnan(t(f"law/{m}/cholesky_dense_refactor"))
+        over = lambda num, den: (lambda x: x(num) / x(den))
+        general = lambda x: general_time(x, m)
+        kkt = f"baseline/{m}/dynamic_kkt"
+        target("general (dense A, factored every call) >= 2x faster than dynamic KKT LU", m,
+               lambda x: x(kkt) / general(x), at_least(2))
         if declared:
             target("declared diagonal A (factored every call) >= 4x faster than dynamic KKT LU", m,
-                   kkt / refactor, kkt / refactor >= 4)
+                   over(kkt, f"law/{m}/cholesky_refactor"), at_least(4))
             target("constant A and D, factorization kept (default) >= 4x faster than dynamic KKT LU", m,
-                   kkt / default, kkt / default >= 4)
-        plain = general / t(f"baseline/{m}/plain_fixed")
-        target("checks and diagnostics <= 1.2x the same solve without them", m, plain, plain <= 1.2)
-        target("default >= 8x faster than literal fixed-size SVD", m, lit, lit >= 8)
-        target("default >= 15x faster than dynamic-size user code", m, dyn, dyn >= 15)
+                   over(kkt, f"law/{m}/cholesky"), at_least(4))
+        target("checks and diagnostics <= 1.2x the same solve without them", m,
+               lambda x: general(x) / x(f"baseline/{m}/plain_fixed"), at_most(1.2))
+        target("default >= 8x faster than literal fixed-size SVD", m,
+               over(f"baseline/{m}/literal_fixed", f"law/{m}/cholesky"), at_least(8))
+        target("default >= 15x faster than dynamic-size user code", m,
+               over(f"baseline/{m}/dynamic_user", f"law/{m}/cholesky"), at_least(15))
         for s_ in ("svd", "cod"):
-            r = t(f"law/{m}/{s_}") / default
-            target(f"rank-revealing ({s_.upper()}) <= 3x default", m, r, r <= 3)
-        held = t(f"law/{m}/cholesky_held") / default
-        if not math.isnan(held):
-            target("sampled-data hold (two evaluations: about twice) <= 2.5x default", m, held, held <= 2.5)
+            target(f"rank-revealing ({s_.upper()}) <= 3x default", m, over(f"law/{m}/{s_}", f"law/{m}/cholesky"),
+                   at_most(3))
+        if not math.isnan(t(f"law/{m}/cholesky_held")):
+            target("sampled-data hold (two evaluations: about twice) <= 2.5x default", m,
+                   over(f"law/{m}/cholesky_held", f"law/{m}/cholesky"), at_most(2.5))
     return out
 
 
