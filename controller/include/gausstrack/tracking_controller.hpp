@@ -307,8 +307,11 @@ class TrackingController {
   }
 
  private:
-  // Eq. (32) at (q, q', t) with the stabilization and the force limit.
-  Status evaluate(const VectorN& qv, const VectorN& qdv, Scalar t, Output& out) noexcept {
+  // Eq. (32) at (q, q', t) with the stabilization and the force limit, compiled as one body
+  // (`flatten`): the model's terms, the solve and the force's split are inlined, as the solver's
+  // normal-equations path is, so that no call boundary spills the small matrices. What the solver
+  // marks `noinline` (the rank-revealing factorizations, the failure path) stays out of line.
+  [[gnu::flatten]] Status evaluate(const VectorN& qv, const VectorN& qdv, Scalar t, Output& out) noexcept {
     evaluate_model(model_, qv, qdv, t, terms_);
     out.constraint_error = terms_.constraint_error;
     out.constraint_error_rate = terms_.constraint_error_rate;
