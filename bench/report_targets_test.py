@@ -20,26 +20,39 @@ def rows(name, times_ns):
     return reps + [median]
 
 
-doc = {"benchmarks": rows("law/duffing_2x1/cholesky", [30, 60, 45]) +          # median 45, fastest 30
-                     rows("baseline/duffing_2x1/closed_form", [25, 20, 30]) +  # median 25, fastest 20
-                     rows("law/duffing_2x1/cholesky_refactor", [45, 50, 40]) +  # median 45, fastest 40
-                     rows("baseline/duffing_2x1/dynamic_kkt", [100, 80, 120])}  # median 100, fastest 80
+# duffing_2x1 declares a diagonal A (its general case is cholesky_dense_refactor); dense_2x1
+# declares a dense one (its general case is cholesky_refactor).
+doc = {"benchmarks": rows("law/duffing_2x1/cholesky", [30, 60, 45]) +                # median 45, fastest 30
+                     rows("baseline/duffing_2x1/closed_form", [25, 20, 30]) +        # median 25, fastest 20
+                     rows("law/duffing_2x1/cholesky_refactor", [45, 50, 40]) +       # median 45, fastest 40
+                     rows("law/duffing_2x1/cholesky_dense_refactor", [55, 50, 60]) +  # median 55, fastest 50
+                     rows("law/duffing_2x1/cholesky_held", [90, 80, 100]) +          # median 90, fastest 80
+                     rows("baseline/duffing_2x1/dynamic_kkt", [100, 80, 120]) +      # median 100, fastest 80
+                     rows("law/dense_2x1/cholesky", [40, 40, 40]) +
+                     rows("law/dense_2x1/cholesky_refactor", [45, 50, 40]) +
+                     rows("baseline/dense_2x1/dynamic_kkt", [100, 80, 120])}
 b = report.benchmarks(doc)
-lines = report.targets(b, ["duffing_2x1"])
+lines = report.targets(b, ["duffing_2x1", "dense_2x1"])
 
 failures = []
 
 
-def expect_row(label, measured, fastest, met):
-    row = next((l for l in lines if l.startswith(f"| {label} | duffing_2x1 |")), None)
-    want = f"| {label} | duffing_2x1 | {measured} | {fastest} | {met} |"
+def expect_row(label, system, measured, fastest, met):
+    row = next((l for l in lines if l.startswith(f"| {label} | {system} |")), None)
+    want = f"| {label} | {system} | {measured} | {fastest} | {met} |"
     if row != want:
         failures.append(f"expected {want!r}, got {row!r}")
 
 
-expect_row("Duffing law <= 1.5x its closed form", "1.80x", "1.50x", "**no**")
-# No cholesky_dense_refactor row: a model declared dense, whose general case is cholesky_refactor.
-expect_row("general (dense A, factored every call) >= 2x faster than dynamic KKT LU", "2.22x", "2.00x", "yes")
+general = "general (dense A, factored every call) >= 2x faster than dynamic KKT LU"
+expect_row("Duffing law <= 1.5x its closed form", "duffing_2x1", "1.80x", "1.50x", "**no**")
+expect_row(general, "duffing_2x1", "1.82x", "1.60x", "**no**")
+expect_row("declared diagonal A (factored every call) >= 4x faster than dynamic KKT LU", "duffing_2x1", "2.22x",
+           "2.00x", "**no**")
+expect_row("sampled-data hold (two evaluations: about twice) <= 2.5x default", "duffing_2x1", "2.00x", "2.67x", "yes")
+expect_row(general, "dense_2x1", "2.22x", "2.00x", "yes")
+if any(l.startswith("| declared diagonal") and "| dense_2x1 |" in l for l in lines):
+    failures.append("a declared-diagonal target for a model declared dense")
 median, fastest = b["law/duffing_2x1/cholesky"][0], b["law/duffing_2x1/cholesky"][1]["min_time_ns"]
 if abs(median - 45) > 1e-9 or abs(fastest - 30) > 1e-9:
     failures.append(f"benchmarks(): {b['law/duffing_2x1/cholesky']}")

@@ -9,7 +9,9 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <vector>
 
+#include "gausstrack/rank_revealing.hpp"
 #include "gausstrack/small_dense.hpp"
 #include "small_dense_cases.hpp"
 
@@ -109,6 +111,43 @@ TEST(SmallDense, AllEqualMatchesCompare) {
 TEST(SmallDense, AllFiniteMatchesIsfinite) {
   expect_all_finite_matches_isfinite<double>();
   expect_all_finite_matches_isfinite<float>();
+}
+
+// The rank-revealing kernels' scale (rank_revealing.hpp) against its definition, checked with
+// frexp: a power of two s with max |x_i| / s in [1, 2), for largest entries across the whole range
+// (both ends of the normal range, powers of two and the values just below them, subnormals),
+// either sign, at any position; 1 for a zero, infinite or NaN largest entry.
+template <typename Scalar>
+void expect_power_of_two_scale_meets_its_definition() {
+  using limits = std::numeric_limits<Scalar>;
+  std::vector<Scalar> largest = {limits::max(), limits::min(), limits::denorm_min(), limits::min() / Scalar(3),
+                                 limits::min() - limits::denorm_min(), Scalar(1), Scalar(2), Scalar(0.75)};
+  for (int e = limits::min_exponent - 1; e < limits::max_exponent; e += 7) {
+    const Scalar p = std::ldexp(Scalar(1), e);
+    largest.insert(largest.end(), {p, std::nextafter(p, Scalar(0)), p * Scalar(1.5)});
+  }
+  for (const Scalar m : largest) {
+    for (int at = 0; at < 3; ++at) {
+      for (const Scalar sign : {Scalar(1), Scalar(-1)}) {
+        Scalar x[3] = {m / Scalar(4), Scalar(0), -m / Scalar(8)};
+        x[at] = sign * m;
+        const Scalar s = small_dense::power_of_two_scale(x, 3);
+        int exponent = 0;
+        EXPECT_EQ(std::frexp(s, &exponent), Scalar(0.5)) << m;  // s is a power of two
+        EXPECT_GE(m / s, Scalar(1)) << m;
+        EXPECT_LT(m / s, Scalar(2)) << m;
+      }
+    }
+  }
+  for (const Scalar bad : {Scalar(0), limits::infinity(), -limits::infinity(), limits::quiet_NaN()}) {
+    const Scalar x[2] = {bad, bad};
+    EXPECT_EQ(small_dense::power_of_two_scale(x, 2), Scalar(1)) << bad;
+  }
+}
+
+TEST(SmallDense, PowerOfTwoScaleMeetsItsDefinition) {
+  expect_power_of_two_scale_meets_its_definition<double>();
+  expect_power_of_two_scale_meets_its_definition<float>();
 }
 
 // A NaN counts as nonzero in a column's support, wherever it is (alone in it too); a zero column

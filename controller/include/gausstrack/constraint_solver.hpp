@@ -583,7 +583,7 @@ class ConstraintSolver {
     svd_damping2_ = options_.strategy == InverseStrategy::kDampedLeastSquares ? options_.damping * options_.damping
                                                                                : Scalar(0);
     svd_u_ = bt_;
-    if (!small_dense::jacobi_svd_fixed<N, P>(svd_u_.data(), svd_sigma_.data(), svd_v_.data())) return false;
+    if (!small_dense::jacobi_svd_in_place(svd_u_.data(), N, P, svd_sigma_.data(), svd_v_.data())) return false;
     const VectorP& s = svd_sigma_;
     rank_ = 0;
     if (s(0) > Scalar(0)) {

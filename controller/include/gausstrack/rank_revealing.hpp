@@ -4,8 +4,10 @@
 // Why by hand: Eigen's fixed-size JacobiSVD and CompleteOrthogonalDecomposition unroll into a large
 // amount of code at every size they are instantiated with, and every model pays for them because
 // the strategy is chosen at run time. The SVD takes run-time sizes and is templated on the scalar
-// alone (compiled once per scalar type, whatever the models); the complete orthogonal
-// decomposition keeps fixed-size storage, plain loops of a few kilobytes of code per size.
+// alone (the solver's is compiled once per scalar type, whatever the models); the actuated law,
+// which may take it on every call, compiles it at its own sizes (jacobi_svd_fixed). The complete
+// orthogonal decomposition keeps fixed-size storage, plain loops of a few kilobytes of code per
+// size.
 // Nothing allocates or throws; every loop is bounded.
 //
 // Scaling. Each kernel first divides its matrix by a power of two near its largest entry (exact),
@@ -15,8 +17,11 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <type_traits>
 #include <utility>
 
 namespace gausstrack::small_dense {
@@ -28,7 +33,15 @@ Scalar power_of_two_scale(const Scalar* x, int count) noexcept {
   Scalar largest(0);
   for (int i = 0; i < count; ++i) largest = std::max(largest, std::abs(x[i]));
   if (!(largest > Scalar(0)) || !std::isfinite(largest)) return Scalar(1);
-  int exponent = 0;
+  if constexpr (std::numeric_limits<Scalar>::is_iec559 && (sizeof(Scalar) == 4 || sizeof(Scalar) == 8)) {
+    // A normal value with its mantissa cleared is the power of two at or below it: no library
+    // call (frexp and ldexp are most of this function's cost on a small matrix).
+    using Bits = std::conditional_t<sizeof(Scalar) == 8, std::uint64_t, std::uint32_t>;
+    constexpr int kMantissa = std::numeric_limits<Scalar>::digits - 1;
+    const Bits bits = std::bit_cast<Bits>(largest);
+    if ((bits >> kMantissa) != 0) return std::bit_cast<Scalar>(bits & ~((Bits(1) << kMantissa) - 1));
+  }
+  int exponent = 0;  // a subnormal largest entry
   (void)std::frexp(largest, &exponent);
   return std::ldexp(Scalar(1), exponent - 1);  // max / s in [1, 2): s is representable even at the top
 }
@@ -141,8 +154,9 @@ bool jacobi_svd_in_place(Scalar* w, int rows, int cols, Scalar* sigma, Scalar* v
 }
 
 /// jacobi_svd_in_place at compile-time sizes, out of line: one body per size with every kernel
-/// inlined (the rotations' loops keep their constant bounds), called from a hot body that the SVD,
-/// dominated by its own work, would otherwise grow.
+/// inlined (the rotations' loops keep their constant bounds), for a caller that may take the SVD
+/// on every call, from a hot body that the SVD, dominated by its own work, would otherwise grow.
+/// It costs a copy of the SVD per size; the solver's fallback, rarely taken, keeps run-time sizes.
 template <int Rows, int Cols, typename Scalar>
 [[gnu::noinline, gnu::flatten]] bool jacobi_svd_fixed(Scalar* w, Scalar* sigma, Scalar* v) noexcept {
   static_assert(Rows >= Cols, "the thin SVD needs rows >= columns");
@@ -269,8 +283,10 @@ template <typename Scalar, int MaxRows, int MaxCols>
 void solve_complete_orthogonal(const CompleteOrthogonal<Scalar, MaxRows, MaxCols>& f,
                                const Scalar* c, Scalar* y, Scalar* work) noexcept {
   const int rows = f.rows, cols = f.cols, r = f.rank;
-  for (int i = 0; i < cols; ++i) y[i] = Scalar(0);
-  if (r == 0) return;
+  if (r == 0) {
+    for (int i = 0; i < cols; ++i) y[i] = Scalar(0);
+    return;
+  }
   for (int i = 0; i < rows; ++i) work[i] = c[i] / f.scale;  // (s B)^+ = B^+ / s
   // work = Q^T c: only the first r reflectors touch entries 0 .. r-1.
   for (int k = 0; k < r; ++k)
@@ -285,7 +301,7 @@ void solve_complete_orthogonal(const CompleteOrthogonal<Scalar, MaxRows, MaxCols
   }
   // t = Z [x; 0] (Z = H_0 ... H_(r-1)), then y = Pi t.
   Scalar t[MaxCols] = {};
-  for (int i = 0; i < cols; ++i) t[i] = i < r ? x[i] : Scalar(0);
+  for (int i = 0; i < r; ++i) t[i] = x[i];
   for (int k = r - 1; k >= 0; --k)
     apply_householder(f.z + k * cols + k + 1, f.z_tau[k], t + k, cols - k);
   for (int k = 0; k < cols; ++k) y[f.permutation[k]] = t[k];
