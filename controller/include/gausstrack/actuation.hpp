@@ -287,12 +287,12 @@ class ActuatedController {
   }
 
  private:
-  // The actuated law at (q, q', t), compiled as one body (`flatten`, as the plain law's solve): its
-  // many small steps (the factors, the projections, the row judgement) are inlined instead of
-  // called, so that no call boundary spills the small matrices or reloads the member state. The
-  // body holds the path the model takes by default: the plain case when the model has one, else
-  // the general law. What is rarely taken or dominated by its own work stays out of line
-  // (`noinline`): the general law beside a plain case, the SVDs, fail().
+  // The actuated law at (q, q', t), compiled as one body (`flatten`, as the plain law's
+  // evaluation): its many small steps (the factors, the projections, the row judgement) are
+  // inlined instead of called, so that no call boundary spills the small matrices or reloads the
+  // member state. The body holds the path the model takes by default: the plain case when the
+  // model has one, else the general law. What is rarely taken or dominated by its own work stays
+  // out of line (`noinline`): the general law beside a plain case, the SVDs, fail().
   [[gnu::flatten]] Status evaluate(const VectorN& qv, const VectorN& qdv, Scalar t, Output& out) noexcept {
     // Every vector of `out` is written below on success, and fail() resets them all: only what
     // accumulates starts afresh here.

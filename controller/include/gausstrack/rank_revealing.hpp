@@ -19,10 +19,10 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <cstdint>
 #include <limits>
-#include <type_traits>
 #include <utility>
+
+#include "gausstrack/small_dense.hpp"
 
 namespace gausstrack::small_dense {
 
@@ -33,10 +33,10 @@ Scalar power_of_two_scale(const Scalar* x, int count) noexcept {
   Scalar largest(0);
   for (int i = 0; i < count; ++i) largest = std::max(largest, std::abs(x[i]));
   if (!(largest > Scalar(0)) || !std::isfinite(largest)) return Scalar(1);
-  if constexpr (std::numeric_limits<Scalar>::is_iec559 && (sizeof(Scalar) == 4 || sizeof(Scalar) == 8)) {
+  if constexpr (detail::kHasIeeeBits<Scalar>) {
     // A normal value with its mantissa cleared is the power of two at or below it: no library
     // call (frexp and ldexp are most of this function's cost on a small matrix).
-    using Bits = std::conditional_t<sizeof(Scalar) == 8, std::uint64_t, std::uint32_t>;
+    using Bits = detail::IeeeBits<Scalar>;
     constexpr int kMantissa = std::numeric_limits<Scalar>::digits - 1;
     const Bits bits = std::bit_cast<Bits>(largest);
     if ((bits >> kMantissa) != 0) return std::bit_cast<Scalar>(bits & ~((Bits(1) << kMantissa) - 1));
