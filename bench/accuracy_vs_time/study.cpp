@@ -30,7 +30,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
-#include <iterator>
 #include <fstream>
 #include <random>
 #include <string>
@@ -42,7 +41,6 @@
 #include "pendulum_angle_model.hpp"
 #include "study.hpp"
 #include "gausstrack/systems/coupled_duffing.hpp"
-#include "gausstrack/tracking_controller.hpp"
 
 namespace {
 

@@ -3,6 +3,8 @@
 // Apart from actuation_closed_forms_test.cpp so that neither unit's compile passes 1.5 GB.
 #include <gtest/gtest.h>
 
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <cmath>
 #include <limits>
 

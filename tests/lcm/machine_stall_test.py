@@ -32,7 +32,7 @@ assert STALL_MS == 10.0, "the cases below are written for a 10 ms rule"
 # The plant's own wake-ups: strictly more than 10 ms late.
 expect("a quiet run", machine_stall(plant(800.0)), False)
 expect("woken 10 ms late", machine_stall(plant(10000.0)), False)
-expect("woken 10.5 ms late", machine_stall(plant(10500.0)), True, "stalled the plant 10 ms")
+expect("woken 10.6 ms late", machine_stall(plant(10600.0)), True, "stalled the plant 11 ms")
 expect("woken 250 ms late", machine_stall(plant(250000.0)), True, "250 ms")
 
 # The controller's backlog at 1 kHz: 10 states queued at once is 10 ms held back.
@@ -40,6 +40,8 @@ expect("9 states queued (plant's count)", machine_stall(plant(500.0, 9)), False)
 expect("10 states queued (plant's count)", machine_stall(plant(500.0, 10)), True, "10 states found queued")
 expect("the controllers' own counts", machine_stall(plant(500.0, 2), [{"largest_backlog": 3}, {"largest_backlog": 14}]),
        True, "14 states")
+expect("the plant's count beside smaller controller counts", machine_stall(plant(500.0, 12), [{"largest_backlog": 1}]),
+       True, "12 states")
 expect("controllers under the rule", machine_stall(plant(500.0, 2), [{"largest_backlog": 9}, {}]), False)
 
 # The same count at another rate is another duration: at 10 kHz, 99 states are 9.9 ms, 101 are 10.1 ms;
