@@ -460,13 +460,21 @@ def transport(d):
         with open(floor) as f:
             body = f.read().split("\n", 1)[1]
         out += ["## The closed loop against the machine's floors (same run)"] + demote(body)
+    spin = ("the plant waking 30 us before each deadline and spinning until it (`--spin-us 30`), so that its "
+            "period starts on time without waiting for the scheduler to wake it; the price is up to 30 us of one "
+            "CPU per period (the plant's `spun_ms`). The floor sleeps; the table above is the same loop without "
+            "the spin.")
     sections = (("loop_vs_floor_rk4", "## The same at 10 kHz with a fixed-step plant (one RK4 step per period)",
                  "What a user running a plant in real time would choose: the Duffing scene with "
                  f"`integrator={FIXED_STEP}` instead of dopri5 at 1e-10."),
+                ("loop_vs_floor_rk4_spin", "## The same fixed-step plant spinning the last 30 us of each period",
+                 "The Duffing scene with `integrator=" + FIXED_STEP + "`, " + spin),
                 ("loop_vs_floor_chain8", "## The 8-mass chain at 10 kHz", "Eight coordinates and four tracked rows, "
                  "the plant integrated by its scene's dopri5 at 1e-10 each period."),
                 ("loop_vs_floor_chain8_rk4", "## The 8-mass chain at 10 kHz with a fixed-step plant (one RK4 step "
-                 "per period)", f"The same scene with `integrator={FIXED_STEP}`."))
+                 "per period)", f"The same scene with `integrator={FIXED_STEP}`."),
+                ("loop_vs_floor_chain8_rk4_spin", "## The 8-mass chain's fixed-step plant spinning the last 30 us of "
+                 "each period", "The 8-mass chain with `integrator=" + FIXED_STEP + "`, " + spin))
     for name, title, intro in sections:
         path = os.path.join(d, name, "README.md")
         if os.path.exists(path):
@@ -477,9 +485,10 @@ def transport(d):
 
 
 FIXED_STEP = "{method: rk4, step: 1.0e-4}"
-# Scene, its loop runs with the scene's adaptive integrator and with one fixed RK4 step per period.
-LOAD_RUNS = (("duffing_alpha4", "loop_vs_floor", "loop_vs_floor_rk4"),
-             ("duffing_chain8", "loop_vs_floor_chain8", "loop_vs_floor_chain8_rk4"))
+# Scene, its loop runs with the scene's adaptive integrator, with one fixed RK4 step per period, and
+# with that step and a spin before each deadline.
+LOAD_RUNS = (("duffing_alpha4", "loop_vs_floor", "loop_vs_floor_rk4", "loop_vs_floor_rk4_spin"),
+             ("duffing_chain8", "loop_vs_floor_chain8", "loop_vs_floor_chain8_rk4", "loop_vs_floor_chain8_rk4_spin"))
 
 
 def integration_load(d):
@@ -490,9 +499,9 @@ def integration_load(d):
     beside the plant's loop thread's CPU time per period; medians over the run's 10 kHz cases."""
     cost = rhs_cost_us(d)
     out = []
-    for scene, adaptive, fixed in LOAD_RUNS:
-        for name, label in ((adaptive, "dopri5 1e-10"), (fixed, "RK4, step 1e-4")):
-            evals, loop = [], []
+    for scene, adaptive, fixed, spinning in LOAD_RUNS:
+        for name, label in ((adaptive, "dopri5 1e-10"), (fixed, "RK4, step 1e-4"), (spinning, "RK4, step 1e-4")):
+            evals, loop, spins = [], [], set()
             for r in load(os.path.join(d, name), "loop_vs_floor.json") or []:
                 main = (r.get("loop_threads") or {}).get("plant", {}).get("main")
                 summary = load(os.path.join(d, name, f"loop_{r.get('tag')}"), "summary.json")
@@ -500,9 +509,12 @@ def integration_load(d):
                     continue
                 if summary.get("states_published"):
                     evals.append(summary["rhs_evaluations"] / summary["states_published"])
-                    loop.append(per_period_us(r))
+                    loop.append(per_period_us(r, summary))
+                    spins.add(summary.get("spin_us", 0))
             if evals:
-                out.append((scene, label, median(evals), cost.get(scene), median(loop)))
+                spun = ", ".join(f"{x} us spun" for x in sorted(spins) if x)
+                out.append((scene, label + (f", {spun}" if spun else ""), median(evals), cost.get(scene),
+                            median(loop)))
     if not out:
         return []
     lines = ["# Is the plant's integration the load?", "",
@@ -511,7 +523,7 @@ def integration_load(d):
              "times the cost of one (the scene's RK4 at its finest step in What accuracy costs, whose "
              "right-hand side also evaluates the law: an upper bound for the plant's alone), and the "
              "plant's loop thread's CPU time (wake-up, the socket's messages, the state's publication, "
-             "the integration, the sleep).", "",
+             "the integration, the sleep; less the time spun before the deadlines, where the plant spins).", "",
              "| scene | integrator | evaluations per period | integration, at most [us] | plant's loop thread [us] "
              "| integration's share, at most |", "|---|---|---|---|---|---|"]
     verdicts = {}
@@ -546,9 +558,11 @@ def rhs_cost_us(d):
     return {scene: 1e6 * wall / evals for scene, (evals, wall) in best.items()}
 
 
-def per_period_us(r):
-    """The plant's loop thread's CPU time per period [us] of one loop_vs_floor row."""
-    return 1e3 * r["loop_threads"]["plant"]["main"]["cpu_ms"] / max(r["loop_periods"], 1)
+def per_period_us(r, summary):
+    """The plant's loop thread's CPU time per period [us] of one loop_vs_floor row, less the time it
+    spun before its deadlines (--spin-us; the run's summary)."""
+    cpu_ms = r["loop_threads"]["plant"]["main"]["cpu_ms"] - summary.get("spun_ms", 0.0)
+    return 1e3 * cpu_ms / max(r["loop_periods"], 1)
 
 
 def authentication(d):

@@ -9,8 +9,9 @@ targets (the loop's round trip within 1.2x of bare LCM at the same pace; its dea
 scheduler).
 
 usage: loop_vs_floor.py BIN_DIR SCENE OUT [--seconds S] [--rates 1000,10000] [--no-hog]
-                        [--schedulers default,realtime,realtime_1cpu] [--set KEY=VALUE ...]
-  --set  passed to gausstrack-run (e.g. integrator={method: rk4, step: 1.0e-4}: a fixed-step plant)
+                        [--schedulers default,realtime,realtime_1cpu] [--set KEY=VALUE ...] [--spin-us S]
+  --set      passed to gausstrack-run (e.g. integrator={method: rk4, step: 1.0e-4}: a fixed-step plant)
+  --spin-us  the plant's --spin-us, and the same for the paced round trips (the floor always sleeps)
 """
 import argparse
 import json
@@ -147,14 +148,15 @@ def scheduler_args(sched):
             "realtime_1cpu": ["--realtime", "--cpus", f"{last},{last}"]}[sched]
 
 
-def measure(bin_dir, scene, out, rate, sched, hog, seconds, sets=()):
+def measure(bin_dir, scene, out, rate, sched, hog, seconds, sets=(), spin_us=0):
     tag = f"{rate:g}hz_{sched}_{'hog' if hog else 'quiet'}"
     hogs = [subprocess.Popen(["yes"], stdout=subprocess.DEVNULL)] if hog else []
     try:
         rt = scheduler_args(sched)
+        spin = ["--spin-us", str(spin_us)] if spin_us else []
         tj = os.path.join(out, f"transport_{tag}.json")
         if run([os.path.join(bin_dir, "bench", "transport_bench"), "--rate", f"{rate:g}", "--seconds", f"{seconds:g}",
-                "--out", tj] + rt, os.path.join(out, f"transport_{tag}.txt")) != 0:
+                "--out", tj] + rt + spin, os.path.join(out, f"transport_{tag}.txt")) != 0:
             return {"tag": tag, "error": "transport_bench failed"}
         loop_dir = os.path.join(out, f"loop_{tag}")
         softirq_before = softirq_snapshot()
@@ -162,7 +164,7 @@ def measure(bin_dir, scene, out, rate, sched, hog, seconds, sets=()):
         code, threads = run_watching_threads(
             [os.path.join(bin_dir, "bin", "gausstrack-run"), scene, "--rate", f"{rate:g}", "--duration",
              f"{seconds:g}", "--set", "tracking.stabilization={zeta: 1.0, omega: 20.0}", "--out", loop_dir,
-             "--no-plots", "--channel-prefix", prefix] + [x for kv in sets for x in ("--set", kv)] + rt,
+             "--no-plots", "--channel-prefix", prefix] + [x for kv in sets for x in ("--set", kv)] + rt + spin,
             os.path.join(out, f"loop_{tag}.txt"), prefix)
         softirq_after = softirq_snapshot()
         if code != 0:
@@ -180,7 +182,7 @@ def measure(bin_dir, scene, out, rate, sched, hog, seconds, sets=()):
     periods = t["round_trips"]
     loop_periods = s.get("states_published", 0) or 1
     return {
-        "tag": tag, "rate_hz": rate, "scheduler": sched, "hog": hog, "periods": periods,
+        "tag": tag, "rate_hz": rate, "scheduler": sched, "hog": hog, "spin_us": spin_us, "periods": periods,
         "floor_wake_us": quantiles(t, "sleep_wake_late_us"), "floor_misses": t.get("sleep_deadline_misses"),
         "udp_us": quantiles(t, "udp_us"), "lcm_us": quantiles(t, "lcm_us"),
         "lcm_wake_us": quantiles(t, "lcm_wake_late_us"), "lcm_misses": t.get("lcm_deadline_misses"),
@@ -197,10 +199,12 @@ def ratio(a, b):
     return a / b if b else float("inf") if a else 1.0
 
 
-def report(rows, out, seconds, scene="", sets=()):
+def report(rows, out, seconds, scene="", sets=(), spin_us=0):
+    spin = (f"; the plant wakes {spin_us} us before each deadline and spins until it (`--spin-us {spin_us}`), and so "
+            "does the pacing of the bare UDP and LCM round trips; the floor sleeps") if spin_us else ""
     lines = ["# The closed loop against the machine's floors", "",
              f"Scene `{os.path.basename(scene)}`" + (", " + ", ".join(f"`--set {x}`" for x in sets) if sets else "")
-             + ".", "",
+             + spin + ".", "",
              f"Written by `bench/transport/loop_vs_floor.py`; every row is one run of {seconds:g} s per path, all "
              "rows in one invocation. `floor`: a bare `clock_nanosleep` loop at the rate (cyclictest's method); "
              "`UDP`, `LCM`: bare round trips paced at the same rate and scheduling; `loop`: `gausstrack-run` (the "
@@ -292,6 +296,8 @@ def main(argv):
     p.add_argument("--no-hog", action="store_true")
     p.add_argument("--schedulers", default=",".join(SCHEDULERS), help="of " + ", ".join(SCHEDULERS))
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="passed to gausstrack-run")
+    p.add_argument("--spin-us", type=int, default=0,
+                   help="the plant's --spin-us, also the paced round trips' (the floor always sleeps)")
     p.add_argument("--report-only", action="store_true",
                    help="measure nothing: rewrite OUT/README.md from OUT's rows and the loop runs' summaries")
     a = p.parse_args(argv)
@@ -305,7 +311,7 @@ def main(argv):
                     s = json.load(f)
                 r.setdefault("loop_answered", s.get("commands_published"))
                 r.setdefault("loop_superseded", s.get("states_superseded"))
-        report(rows, a.out, a.seconds, a.scene, a.set)
+        report(rows, a.out, a.seconds, a.scene, a.set, max((r.get("spin_us", 0) for r in rows), default=0))
         return 0
     schedulers = a.schedulers.split(",")
     if any(x not in SCHEDULERS for x in schedulers):
@@ -315,11 +321,11 @@ def main(argv):
     for rate in [float(x) for x in a.rates.split(",")]:
         for sched in schedulers:
             for hog in (False,) if a.no_hog else (False, True):
-                rows.append(measure(a.bin_dir, a.scene, a.out, rate, sched, hog, a.seconds, a.set))
+                rows.append(measure(a.bin_dir, a.scene, a.out, rate, sched, hog, a.seconds, a.set, a.spin_us))
                 print(json.dumps(rows[-1]), flush=True)
     with open(os.path.join(a.out, "loop_vs_floor.json"), "w") as f:
         json.dump(rows, f, indent=1)
-    report(rows, a.out, a.seconds, a.scene, a.set)
+    report(rows, a.out, a.seconds, a.scene, a.set, a.spin_us)
     return 0 if all("error" not in r for r in rows) else 1
 
 

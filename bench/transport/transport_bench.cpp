@@ -1,5 +1,5 @@
-// transport_bench [--round-trips N] [--rate HZ [--seconds S] [--realtime [--cpus A,B]]] [--lcm-url URL]
-//                 [--out FILE.json]
+// transport_bench [--round-trips N] [--rate HZ [--seconds S] [--realtime [--cpus A,B]] [--spin-us S]]
+//                 [--lcm-url URL] [--out FILE.json]
 // Round trip between two processes on this machine, in one run:
 //   lcm  a plant_state_t published over LCM, answered by a child process that decodes it and
 //        publishes a control_command_t (both encoded into fixed buffers, as the real processes do);
@@ -9,7 +9,8 @@
 // third path measures the machine's own floor in the manner of cyclictest:
 //   sleep  the same paced loop with nothing in it: how late the wake-ups are, and how many are
 //          later than half a period (the loop's deadline misses). The scheduler sets the timer
-//          slack to 1 ns, as it does in the plant.
+//          slack to 1 ns, as it does in the plant. It always sleeps: --spin-us (the plant's option)
+//          applies to the paced round trips only.
 // --realtime applies what `gausstrack-run --realtime` applies: SCHED_FIFO (80 for every thread here;
 // gausstrack-run raises the plant's loop to 83 and its receive thread to 82), mlockall, the pacing
 // process pinned to the last CPU and the answering one to the one before (--cpus A,B: the pacing
@@ -52,11 +53,13 @@ struct Pacing {
   bool realtime = false;
   int cpus = 1;
   int pacing_cpu = -1, answering_cpu = -1;  // -1: the last CPU and the one before
+  int spin_us = 0;  // the round trips' pacing spins this long before each deadline (not the floor's)
   std::unique_ptr<PeriodScheduler> scheduler;
-  void start(std::size_t periods) {
+  void start(std::size_t periods, bool spin = true) {
     if (rate_hz > 0)
       scheduler = std::make_unique<PeriodScheduler>(static_cast<std::int64_t>(1e9 / rate_hz),
-                                                    gausstrack::nodes::monotonic_ns() + 1000000, periods);
+                                                    gausstrack::nodes::monotonic_ns() + 1000000, periods,
+                                                    spin ? std::int64_t{spin_us} * 1000 : 0);
   }
   void wait(long k) {
     if (scheduler) scheduler->wait_for(k);
@@ -226,7 +229,7 @@ void wake_json(const char* name, const Pacing& pacing, nlohmann::ordered_json& j
 
 // The cyclictest-style floor: the paced loop with nothing in it.
 void sleep_only(long n, Pacing& pacing) {
-  pacing.start(static_cast<std::size_t>(n));
+  pacing.start(static_cast<std::size_t>(n), false);
   for (long k = 0; k < n; ++k) pacing.wait(k);
 }
 
@@ -250,6 +253,11 @@ int main(int argc, char** argv) {
       ->expected(2)
       ->check(CLI::NonNegativeNumber)
       ->needs(realtime);
+  app.add_option("--spin-us", pacing.spin_us,
+                 "paced round trips: wake this long before each deadline and spin until it, as the plant's "
+                 "--spin-us (the floor always sleeps)")
+      ->check(CLI::NonNegativeNumber)
+      ->needs(rate);
   app.add_option("--lcm-url", url)->capture_default_str();
   app.add_option("--out", out, "write the percentiles as JSON to this file");
   try {
@@ -259,6 +267,8 @@ int main(int argc, char** argv) {
   }
   if (!std::isfinite(pacing.rate_hz) || !std::isfinite(seconds))
     return std::fprintf(stderr, "error: --rate and --seconds must be finite\n"), 2;
+  if (pacing.spin_us > 0 && pacing.spin_us * 1e-6 >= 1 / pacing.rate_hz)
+    return std::fprintf(stderr, "error: --spin-us must be less than the period\n"), 2;
   if (cpus.size() == 2) {
     pacing.pacing_cpu = cpus[0];
     pacing.answering_cpu = cpus[1];
@@ -297,6 +307,7 @@ int main(int argc, char** argv) {
     nlohmann::ordered_json doc = {{"round_trips", n},
                                   {"rate_hz", pacing.rate_hz},
                                   {"realtime", pacing.realtime},
+                                  {"spin_us", pacing.spin_us},
                                   {"state_bytes", state_bytes},
                                   {"command_bytes", command_bytes},
                                   {"lcm_url", url},

@@ -23,6 +23,10 @@ namespace gausstrack::nodes {
 void PlantNode::add_to_summary(nlohmann::ordered_json& j, long log_dropped) const {
   j["mode"] = o_.lockstep ? "lockstep" : "realtime";
   j["control_rate_hz"] = o_.rate_hz;
+  if (!o_.lockstep) {
+    j["spin_us"] = o_.spin_us;
+    j["spun_ms"] = static_cast<double>(scheduler_.spun_ns()) * 1e-6;  // CPU time the spin took
+  }
   j["run_id"] = run_id_;
   j["states_published"] = counts_.states_published;
   j["commands_applied"] = counts_.commands_applied;
@@ -71,6 +75,11 @@ std::optional<int> parse_plant_options(int argc, char** argv, PlantProcessOption
                  "real time: answers act this many periods after their state, fixed (0: one more than the 75th "
                  "percentile of the measured round trips)")
       ->check(CLI::Range(0, HoldLag::kMaxLag))
+      ->capture_default_str();
+  app.add_option("--spin-us", o.node.spin_us,
+                 "real time: wake this long before each period's deadline and spin until it (fewer late periods "
+                 "at high rates, for up to this much CPU time per period; less than the period)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   std::string safe_action = "zero";
   app.add_option("--safe-action", safe_action, "what the watchdog applies: zero force, or hold the last")

@@ -7,7 +7,7 @@ whatever the pace, unlike a listener on the network, which can miss a burst.
 
 usage: gausstrack-run SCENE [--duration T] [--rate HZ] [--lockstep] [--log FILE] [--out DIR]
                       [--set key=value ...] [--lcm-url URL] [--channel-prefix P]
-                      [--realtime [--cpus PLANT,CONTROLLER]] [--watchdog-ms W]
+                      [--realtime [--cpus PLANT,CONTROLLER]] [--spin-us S] [--watchdog-ms W]
                       [--safe-action zero|hold] [--no-plots]
 
 The scene runs with sampled control at --rate (default 1000 Hz). DIR (default out/run/<scene>)
@@ -15,7 +15,9 @@ receives trajectory.csv (the columns of gausstrack-sim), latency.csv, summary.js
 run and loop statistics merged with the controller's), controller.json, the processes' logs and
 the plots. --realtime asks both processes for SCHED_FIFO, CPU pinning and mlockall (a warning
 when not permitted); --cpus chooses the two CPUs (default: the last two, one each; the same CPU
-twice puts both processes on it). Exit status: 0 when the run completed and both processes stopped cleanly.
+twice puts both processes on it). --spin-us S has the plant wake S us before each period's
+deadline and spin until it: fewer late periods at high rates, for up to S us of CPU per period.
+Exit status: 0 when the run completed and both processes stopped cleanly.
 """
 import argparse
 import json
@@ -48,6 +50,8 @@ def parse(argv):
     p.add_argument("--channel-prefix", default="GAUSSTRACK")
     p.add_argument("--realtime", action="store_true", help="SCHED_FIFO, pinning and mlockall")
     p.add_argument("--cpus", metavar="PLANT,CONTROLLER", help="with --realtime: the CPUs to pin to")
+    p.add_argument("--spin-us", type=int, default=0,
+                   help="the plant wakes this long before each deadline and spins until it (less than the period)")
     p.add_argument("--watchdog-ms", type=int, default=50)
     p.add_argument("--safe-action", choices=("zero", "hold"), default="zero")
     p.add_argument("--timeout-ms", type=int, default=2000, help="lock-step: longest wait for a command")
@@ -55,6 +59,8 @@ def parse(argv):
     args = p.parse_args(argv)
     if args.rate <= 0 or (args.duration is not None and args.duration <= 0):
         p.error("--rate and --duration must be positive")
+    if not 0 <= args.spin_us < 1e6 / args.rate:
+        p.error(f"--spin-us must be at least 0 and less than the period ({1e6 / args.rate:g} us at {args.rate:g} Hz)")
     if args.cpus is not None:
         try:
             args.cpus = [int(c) for c in args.cpus.split(",")]
@@ -145,7 +151,8 @@ def command_lines(args, out):
             own[name] += ["--log", path] + (["--log-wait"] if args.lockstep else [])
     own["controller"] += ["--stats-out", os.path.join(out, "controller.json")]
     own["plant"] += ["--out", out, "--watchdog-ms", str(args.watchdog_ms), "--safe-action", args.safe_action,
-                     "--timeout-ms", str(args.timeout_ms)] + (["--lockstep"] if args.lockstep else [])
+                     "--timeout-ms", str(args.timeout_ms), "--spin-us", str(args.spin_us)]
+    own["plant"] += ["--lockstep"] if args.lockstep else []
     return common, own, part_logs
 
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # gausstrack-run in real time at 1 kHz for 2 s with stabilization (zeta 1, omega 20), run the way
 # a user runs it on a busy machine: --realtime (SCHED_FIFO, pinning, mlockall where permitted; CI
-# runs as root). What is asserted is what the product guarantees whatever the load, not how well
+# runs as root), the plant spinning the last 200 us of each period (--spin-us). What is asserted is what the product guarantees whatever the load, not how well
 # an unprivileged loop keeps time (that is measured by scripts/bench):
 # - every period is accounted for: a fresh command applied or a missing one counted;
 # - the log holds every state and command the processes published, exactly;
@@ -21,9 +21,17 @@ for bad in "--realtime --cpus 1" "--realtime --cpus 1,x" "--realtime --cpus -1,0
   fi
   grep -q -- "--cpus" "$work/bad.txt" || { cat "$work/bad.txt" >&2; exit 1; }
 done
+# So is a spin that is negative or not shorter than the period (1000 us at 1 kHz).
+for bad in "--spin-us -1" "--spin-us 1000"; do
+  # shellcheck disable=SC2086
+  if "$bin/gausstrack-run" "$scene" --rate 1000 $bad --no-plots > "$work/bad.txt" 2>&1; then
+    echo "gausstrack-run accepted $bad" >&2; exit 1
+  fi
+  grep -q -- "--spin-us" "$work/bad.txt" || { cat "$work/bad.txt" >&2; exit 1; }
+done
 prefix="REALTIME$$"
 "$bin/gausstrack-run" "$scene" --rate 1000 --duration 2 --set "tracking.stabilization={zeta: 1.0, omega: 20.0}" \
-  --out "$work/run" --channel-prefix "$prefix" --realtime --no-plots --log "$work/run.lcmlog" &
+  --out "$work/run" --channel-prefix "$prefix" --realtime --spin-us 200 --no-plots --log "$work/run.lcmlog" &
 run=$!
 trap 'kill "$run" 2> /dev/null || true' EXIT
 # While it runs: each process's threads with their scheduling policy (field 41 of the thread's
@@ -74,6 +82,7 @@ rows = list(csv.DictReader(open(sys.argv[4])))
 print({k: s[k] for k in ("max_tracking_error", "rms_tracking_error", "states_published", "commands_applied",
                          "commands_missing", "commands_published", "deadline_misses", "watchdog_trips")}, counts)
 assert s["mode"] == "realtime"
+assert s["spin_us"] == 200, s["spin_us"]   # --spin-us reached the plant
 assert s["states_published"] == 2000, s["states_published"]
 assert s["commands_applied"] + s["commands_missing"] == s["states_published"]
 assert 0 < s["commands_published"] <= s["states_published"]

@@ -972,6 +972,20 @@ TEST(HoldLag, AFixedLagIgnoresTheRoundTrips) {
   EXPECT_THROW(PlantNode(lcm, states, "CMD", 2, o), std::invalid_argument);
 }
 
+TEST(PlantNode, ASpinIsShorterThanThePeriod) {
+  lcm::LCM lcm{"memq://"};
+  Outbox states{lcm, "STATE", nullptr, false};
+  PlantNodeOptions o;
+  o.rate_hz = 1000;
+  for (int spin_us : {-1, 1000, 5000}) {
+    o.spin_us = spin_us;
+    EXPECT_THROW(PlantNode(lcm, states, "CMD", 2, o), std::invalid_argument) << spin_us;
+  }
+  o.spin_us = 999;
+  PlantNode node(lcm, states, "CMD", 2, o);
+  EXPECT_EQ(node.scheduler().sleep_until(4), node.scheduler().deadline(4) - 999'000);
+}
+
 TEST(Watchdog, TripsOncePerOutageAndClearsOnACommand) {
   Watchdog w(20'000'000, 0);
   EXPECT_FALSE(w.check(19'000'000));
@@ -998,6 +1012,34 @@ TEST(PeriodScheduler, DeadlinesAreAbsoluteAndLateWakeUpsAreMisses) {
   // A real wait wakes at or after its deadline.
   PeriodScheduler real(2'000'000, monotonic_ns(), 4);
   for (int k = 1; k <= 3; ++k) EXPECT_GE(real.wait_for(k), real.deadline(k));
+  EXPECT_EQ(real.sleep_until(2), real.deadline(2));
+}
+
+// Thread CPU time [ns].
+std::int64_t thread_cpu_ns() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<std::int64_t>(t.tv_sec) * 1000000000LL + t.tv_nsec;
+}
+
+TEST(PeriodScheduler, ASpinSleepsUntilThatLongBeforeTheDeadlineThenReadsTheClockUntilIt) {
+  constexpr std::int64_t kPeriod = 2'000'000, kSpin = 1'500'000;
+  PeriodScheduler spinning(kPeriod, monotonic_ns(), 12, kSpin);
+  EXPECT_EQ(spinning.sleep_until(3), spinning.deadline(3) - kSpin);
+  // Woken 1.5 ms early, it still never returns before a deadline...
+  const std::int64_t cpu_before = thread_cpu_ns();
+  for (int k = 1; k <= 10; ++k) EXPECT_GE(spinning.wait_for(k), spinning.deadline(k));
+  // ... because it spent the time on a CPU: up to 15 ms over the 10 periods, against microseconds
+  // asleep. Bounded far below 15 ms, so that a loaded machine that takes the CPU away from the
+  // spin part of the time does not fail it; a wait that only slept would spend well under 1 ms.
+  const std::int64_t cpu = thread_cpu_ns() - cpu_before;
+  EXPECT_GT(cpu, 3'000'000);
+  // What it counts as spun is the time from waking to each deadline: at most the spin per period.
+  EXPECT_GT(spinning.spun_ns(), 3'000'000);
+  EXPECT_LE(spinning.spun_ns(), 10 * kSpin);
+  PeriodScheduler sleeping(kPeriod, monotonic_ns(), 4);
+  for (int k = 1; k <= 3; ++k) sleeping.wait_for(k);
+  EXPECT_EQ(sleeping.spun_ns(), 0);
 }
 
 // The real-time setup as the processes run it: apply_realtime, the LCM and its subscription (which

@@ -8,9 +8,10 @@
 // - Real time: periods start on absolute deadlines (PeriodScheduler); past the first state the
 //   plant never waits for a command. The first state's answer is awaited as in lock-step (up to
 //   the timeout) and the clock starts when it comes, so that a run does not begin with a period
-//   of no force. The loop wakes once per period, at its deadline (a timed wait per incoming
-//   message would add a timer's wake-up to every period); it takes the messages that have arrived
-//   then, and before sleeping again those that came since, as far as time allows. Under a flood
+//   of no force. The loop wakes once per period, at its deadline, or spin_us before it and then
+//   reads the clock until it (a timed wait per incoming message would add a timer's wake-up to
+//   every period); it takes the messages that have arrived then, and before sleeping again those
+//   that came since, as far as time allows. Under a flood
 //   (more than kFloodPerPeriod messages in the last period) it instead takes messages as they
 //   come until a quarter period before the deadline, so that the work after the wake stays short. Round trips are
 //   measured from the state's publication to the kernel's receive timestamp of the command
@@ -40,6 +41,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -63,10 +65,14 @@ namespace gausstrack::nodes {
 /// Constructing one sets the calling thread's timer slack to 1 ns (PR_SET_TIMERSLACK): under the
 /// default scheduler Linux may otherwise defer every timed wake-up by up to 50 us, which alone
 /// misses most periods at 10 kHz. (SCHED_FIFO threads have no slack.)
+/// With a spin (spin_ns > 0) the thread sleeps until spin_ns before each deadline and reads the
+/// clock until the deadline: a thread already running when its deadline comes does not wait for
+/// the scheduler to wake it and give it a CPU, which on a stock kernel (and more so on a virtual
+/// CPU that has gone idle) takes tens of us. The price is up to spin_ns of one CPU per period.
 class PeriodScheduler {
  public:
-  PeriodScheduler(std::int64_t period_ns, std::int64_t start_ns, std::size_t periods)
-      : period_ns_(period_ns), start_ns_(start_ns), wake_late_us_(periods) {
+  PeriodScheduler(std::int64_t period_ns, std::int64_t start_ns, std::size_t periods, std::int64_t spin_ns = 0)
+      : period_ns_(period_ns), spin_ns_(spin_ns), start_ns_(start_ns), wake_late_us_(periods) {
     prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
   }
 
@@ -75,12 +81,19 @@ class PeriodScheduler {
   std::int64_t period_ns() const noexcept { return period_ns_; }
   std::int64_t deadline(std::int64_t k) const noexcept { return start_ns_ + period_ns_ * k; }
 
-  /// Sleeps until period k's deadline (at once if it has passed), records how late the wake-up
-  /// was and returns the time of waking.
+  /// When the wait for period k stops sleeping: spin_ns before its deadline.
+  std::int64_t sleep_until(std::int64_t k) const noexcept { return deadline(k) - spin_ns_; }
+
+  /// Waits until period k's deadline (at once if it has passed): sleeps, then spins the last
+  /// spin_ns; records how late it woke and returns the time of waking, never before the deadline.
   std::int64_t wait_for(std::int64_t k) noexcept {
-    const timespec wake = to_timespec(deadline(k));
-    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &wake, nullptr);
-    const std::int64_t now = monotonic_ns();
+    const std::int64_t due = deadline(k);
+    const timespec wake = to_timespec(sleep_until(k));
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &wake, nullptr) == EINTR) {
+    }
+    std::int64_t now = monotonic_ns();
+    if (now < due) spun_ns_ += due - now;
+    while (now < due) now = monotonic_ns();
     record_wake(k, now);
     return now;
   }
@@ -91,10 +104,14 @@ class PeriodScheduler {
     if (late > period_ns_ / 2) ++misses_;
   }
   long misses() const noexcept { return misses_; }
+  /// The time wait_for has spent reading the clock (from waking to the deadline) since
+  /// construction [ns]: the spin's price.
+  std::int64_t spun_ns() const noexcept { return spun_ns_; }
   const LatencyRecorder& wake_late_us() const noexcept { return wake_late_us_; }
 
  private:
-  std::int64_t period_ns_, start_ns_;
+  std::int64_t period_ns_, spin_ns_, start_ns_;
+  std::int64_t spun_ns_ = 0;
   long misses_ = 0;
   LatencyRecorder wake_late_us_;
 };
@@ -186,6 +203,9 @@ struct PlantNodeOptions {
   /// not vary, as a discrete-time design assumes); later answers are counted late. 0: one more than
   /// the 75th percentile of the measured round trips in periods (HoldLag).
   int hold_lag = 0;
+  /// Real time: spin this long before each deadline instead of sleeping (PeriodScheduler): fewer
+  /// late periods at high rates for up to that much CPU time per period. 0 to less than a period.
+  int spin_us = 0;
   std::size_t periods = 1 << 16;  ///< periods to keep latency figures for
   std::int64_t run_id = 0;     ///< 0: chosen at random
 };
@@ -209,7 +229,8 @@ class PlantNode {
   PlantNode(lcm::LCM& lcm, Outbox& states, const std::string& command_channel, int dimension,
             const PlantNodeOptions& o)
       : lcm_(lcm), states_(states), o_(o), codec_(checked(dimension)),
-        scheduler_(static_cast<std::int64_t>(std::llround(1e9 / o.rate_hz)), monotonic_ns(), o.periods),
+        scheduler_(static_cast<std::int64_t>(std::llround(1e9 / o.rate_hz)), monotonic_ns(), o.periods,
+                   std::int64_t{o.spin_us} * 1000),
         watchdog_(static_cast<std::int64_t>(o.watchdog_ms) * 1000000, monotonic_ns()),
         hold_lag_(scheduler_.period_ns(), o.hold_lag), round_trip_us_(o.periods), compute_ns_(o.periods),
         answered_sequences_(o.periods), deadline_work_us_(o.periods), hold_lag_periods_(o.periods),
@@ -221,6 +242,9 @@ class PlantNode {
     if (o.hold_lag < 0 || o.hold_lag > HoldLag::kMaxLag)
       throw std::invalid_argument("PlantNode: a hold lag of " + std::to_string(o.hold_lag) + " periods: 0 (measured) to " +
                                   std::to_string(HoldLag::kMaxLag));
+    if (o.spin_us < 0 || std::int64_t{o.spin_us} * 1000 >= scheduler_.period_ns())
+      throw std::invalid_argument("PlantNode: a spin of " + std::to_string(o.spin_us) + " us at a period of " +
+                                  std::to_string(scheduler_.period_ns() / 1000) + " us: 0 to less than the period");
     const int held = dimension + o.actuators;
     hold_ = Vector::Zero(held);
     incoming_force_ = Vector::Zero(dimension);
