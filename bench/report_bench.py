@@ -460,21 +460,28 @@ def transport(d):
         with open(floor) as f:
             body = f.read().split("\n", 1)[1]
         out += ["## The closed loop against the machine's floors (same run)"] + demote(body)
-    spin = ("the plant waking 30 us before each deadline and spinning until it (`--spin-us 30`), so that its "
-            "period starts on time without waiting for the scheduler to wake it; the price is up to 30 us of one "
-            "CPU per period (the plant's `spun_ms`). The floor sleeps; the table above is the same loop without "
-            "the spin.")
+    def spin(name):
+        """The spin of a loop_vs_floor run (its rows' spin_us), and what it means."""
+        us = max((r.get("spin_us") or 0 for r in load(os.path.join(d, name), "loop_vs_floor.json") or []), default=0)
+        return us, (f"the plant waking {us} us before each deadline and spinning until it (`--spin-us {us}`), so "
+                    "that its period starts without waiting for the scheduler to wake it; the price is up to "
+                    f"{us} us of a CPU per period (the plant's `spun_ms`). Under `--realtime` the spin also holds "
+                    "off the plant's own LCM receive thread (one priority below its loop, on its CPU), and under "
+                    "`realtime_1cpu` the controller: a command arriving during the spin is taken when the period "
+                    "starts. The floor sleeps; the section before is the same loop without the spin.")
+    duffing_spin, duffing_text = spin("loop_vs_floor_rk4_spin")
+    chain_spin, chain_text = spin("loop_vs_floor_chain8_rk4_spin")
     sections = (("loop_vs_floor_rk4", "## The same at 10 kHz with a fixed-step plant (one RK4 step per period)",
                  "What a user running a plant in real time would choose: the Duffing scene with "
                  f"`integrator={FIXED_STEP}` instead of dopri5 at 1e-10."),
-                ("loop_vs_floor_rk4_spin", "## The same fixed-step plant spinning the last 30 us of each period",
-                 "The Duffing scene with `integrator=" + FIXED_STEP + "`, " + spin),
+                ("loop_vs_floor_rk4_spin", f"## The same fixed-step plant spinning the last {duffing_spin} us of "
+                 "each period", f"The Duffing scene with `integrator={FIXED_STEP}`, {duffing_text}"),
                 ("loop_vs_floor_chain8", "## The 8-mass chain at 10 kHz", "Eight coordinates and four tracked rows, "
                  "the plant integrated by its scene's dopri5 at 1e-10 each period."),
                 ("loop_vs_floor_chain8_rk4", "## The 8-mass chain at 10 kHz with a fixed-step plant (one RK4 step "
                  "per period)", f"The same scene with `integrator={FIXED_STEP}`."),
-                ("loop_vs_floor_chain8_rk4_spin", "## The 8-mass chain's fixed-step plant spinning the last 30 us of "
-                 "each period", "The 8-mass chain with `integrator=" + FIXED_STEP + "`, " + spin))
+                ("loop_vs_floor_chain8_rk4_spin", f"## The 8-mass chain's fixed-step plant spinning the last "
+                 f"{chain_spin} us of each period", f"The 8-mass chain with `integrator={FIXED_STEP}`, {chain_text}"))
     for name, title, intro in sections:
         path = os.path.join(d, name, "README.md")
         if os.path.exists(path):
@@ -540,7 +547,7 @@ def integration_load(d):
         verdict = ("is the load" if worst >= 0.5 else "is a large part of the load" if worst >= 0.25
                    else "is not the load: the loop's time is its messages and its timer")
         lines.append(f"- {scene}: the integration {verdict} (at most {100 * worst:.0f} % of the plant's loop "
-                     "thread with either integrator).")
+                     "thread with any of its integrators).")
     return lines + [""]
 
 
@@ -560,8 +567,9 @@ def rhs_cost_us(d):
 
 def per_period_us(r, summary):
     """The plant's loop thread's CPU time per period [us] of one loop_vs_floor row, less the time it
-    spun before its deadlines (--spin-us; the run's summary)."""
-    cpu_ms = r["loop_threads"]["plant"]["main"]["cpu_ms"] - summary.get("spun_ms", 0.0)
+    spun before its deadlines (--spin-us; the run's summary). spun_ms is wall time, at least the
+    spin's CPU time, so the figure is at most the loop's CPU time outside the spin (never below 0)."""
+    cpu_ms = max(r["loop_threads"]["plant"]["main"]["cpu_ms"] - summary.get("spun_ms", 0.0), 0.0)
     return 1e3 * cpu_ms / max(r["loop_periods"], 1)
 
 

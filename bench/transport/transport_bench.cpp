@@ -267,8 +267,12 @@ int main(int argc, char** argv) {
   }
   if (!std::isfinite(pacing.rate_hz) || !std::isfinite(seconds))
     return std::fprintf(stderr, "error: --rate and --seconds must be finite\n"), 2;
-  if (pacing.spin_us > 0 && pacing.spin_us * 1e-6 >= 1 / pacing.rate_hz)
-    return std::fprintf(stderr, "error: --spin-us must be less than the period\n"), 2;
+  if (pacing.spin_us > 0 && !(pacing.rate_hz > 0))
+    return std::fprintf(stderr, "error: --spin-us paces round trips: it needs a --rate above 0\n"), 2;
+  if (pacing.spin_us > 0 && !(pacing.spin_us * pacing.rate_hz < 1e6))
+    return std::fprintf(stderr, "error: --spin-us %d: must be less than the period (%g us at %g Hz)\n",
+                        pacing.spin_us, 1e6 / pacing.rate_hz, pacing.rate_hz),
+           2;
   if (cpus.size() == 2) {
     pacing.pacing_cpu = cpus[0];
     pacing.answering_cpu = cpus[1];

@@ -1,5 +1,5 @@
 // gausstrack-plant --scene S [common options] [--lockstep] [--out DIR] [--timeout-ms T]
-//                  [--watchdog-ms W] [--safe-action zero|hold] [--hold-lag L]
+//                  [--watchdog-ms W] [--safe-action zero|hold] [--hold-lag L] [--spin-us S]
 #include "gausstrack/nodes/plant_process.hpp"
 #ifdef GAUSSTRACK_HAVE_MUJOCO
 #include "gausstrack/plant_sim/mujoco.hpp"

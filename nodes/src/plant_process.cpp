@@ -25,7 +25,9 @@ void PlantNode::add_to_summary(nlohmann::ordered_json& j, long log_dropped) cons
   j["control_rate_hz"] = o_.rate_hz;
   if (!o_.lockstep) {
     j["spin_us"] = o_.spin_us;
-    j["spun_ms"] = static_cast<double>(scheduler_.spun_ns()) * 1e-6;  // CPU time the spin took
+    // The time spent spinning, waking to deadline (wall time: a spin that was preempted counts the
+    // time it was off the CPU too, so its CPU time is at most this).
+    j["spun_ms"] = static_cast<double>(scheduler_.spun_ns()) * 1e-6;
   }
   j["run_id"] = run_id_;
   j["states_published"] = counts_.states_published;
@@ -197,6 +199,11 @@ int plant_main(int argc, char** argv, std::vector<plant_sim::ModelFactory> model
     if (scene.control_mode != ControlMode::kSampled)
       throw SceneError(o.process.scene_path + ": the plant process needs control.mode: sampled (add --set "
                                               "control.mode=sampled --set control.rate=HZ)");
+    if (!o.node.lockstep && o.node.spin_us * scene.control_rate >= 1e6) {
+      std::fprintf(stderr, "error: --spin-us %d: must be less than the control period (%g us at %g Hz)\n",
+                   o.node.spin_us, 1e6 / scene.control_rate, scene.control_rate);
+      return 2;
+    }
     RunOptions run_options;
     run_options.models = std::move(models);
     run_options.engines = std::move(engines);

@@ -104,8 +104,8 @@ class PeriodScheduler {
     if (late > period_ns_ / 2) ++misses_;
   }
   long misses() const noexcept { return misses_; }
-  /// The time wait_for has spent reading the clock (from waking to the deadline) since
-  /// construction [ns]: the spin's price.
+  /// The time wait_for has spent spinning since construction, from waking to each deadline [ns]:
+  /// the spin's price in wall time (its CPU time is at most this).
   std::int64_t spun_ns() const noexcept { return spun_ns_; }
   const LatencyRecorder& wake_late_us() const noexcept { return wake_late_us_; }
 
