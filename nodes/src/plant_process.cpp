@@ -65,7 +65,7 @@ std::optional<int> parse_plant_options(int argc, char** argv, PlantProcessOption
   CLI::App app("Simulates a scene's plant in real time (or lock-step): publishes its state each control period "
                "over LCM and applies the controller's answer; writes the run to --out.");
   add_process_options(app, o.process);
-  app.add_flag("--lockstep", o.node.lockstep, "wait for each command (not real time)");
+  auto* lockstep = app.add_flag("--lockstep", o.node.lockstep, "wait for each command (not real time)");
   app.add_option("--out", o.out_dir, "the run's directory")->capture_default_str();
   app.add_option("--timeout-ms", o.node.timeout_ms, "give up when no controller answers for this long")
       ->check(CLI::PositiveNumber)
@@ -82,6 +82,7 @@ std::optional<int> parse_plant_options(int argc, char** argv, PlantProcessOption
                  "real time: wake this long before each period's deadline and spin until it (fewer late periods "
                  "at high rates, for up to this much CPU time per period; less than the period)")
       ->check(CLI::NonNegativeNumber)
+      ->excludes(lockstep)
       ->capture_default_str();
   std::string safe_action = "zero";
   app.add_option("--safe-action", safe_action, "what the watchdog applies: zero force, or hold the last")

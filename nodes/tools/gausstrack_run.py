@@ -59,6 +59,8 @@ def parse(argv):
     args = p.parse_args(argv)
     if args.rate <= 0 or (args.duration is not None and args.duration <= 0):
         p.error("--rate and --duration must be positive")
+    if args.spin_us and args.lockstep:
+        p.error("--spin-us applies in real time, not with --lockstep")
     if not 0 <= args.spin_us < 1e6 / args.rate:
         p.error(f"--spin-us must be at least 0 and less than the period ({1e6 / args.rate:g} us at {args.rate:g} Hz)")
     if args.cpus is not None:
@@ -151,8 +153,8 @@ def command_lines(args, out):
             own[name] += ["--log", path] + (["--log-wait"] if args.lockstep else [])
     own["controller"] += ["--stats-out", os.path.join(out, "controller.json")]
     own["plant"] += ["--out", out, "--watchdog-ms", str(args.watchdog_ms), "--safe-action", args.safe_action,
-                     "--timeout-ms", str(args.timeout_ms), "--spin-us", str(args.spin_us)]
-    own["plant"] += ["--lockstep"] if args.lockstep else []
+                     "--timeout-ms", str(args.timeout_ms)]
+    own["plant"] += ["--lockstep"] if args.lockstep else ["--spin-us", str(args.spin_us)]
     return common, own, part_logs
 
 

@@ -22,8 +22,9 @@ for bad in "--realtime --cpus 1" "--realtime --cpus 1,x" "--realtime --cpus -1,0
   fi
   grep -q -- "--cpus" "$work/bad.txt" || { cat "$work/bad.txt" >&2; exit 1; }
 done
-# So is a spin that is negative or not shorter than the period (1000 us at 1 kHz).
-for bad in "--spin-us -1" "--spin-us 1000"; do
+# So is a spin that is negative, not shorter than the period (1000 us at 1 kHz), or asked for in
+# lock-step (which has no deadlines).
+for bad in "--spin-us -1" "--spin-us 1000" "--lockstep --spin-us 10"; do
   # shellcheck disable=SC2086
   if "$bin/gausstrack-run" "$scene" --rate 1000 $bad --no-plots > "$work/bad.txt" 2>&1; then
     echo "gausstrack-run accepted $bad" >&2; exit 1
@@ -35,6 +36,10 @@ status=0
 "$bin/gausstrack-plant" --scene "$scene" --set control.mode=sampled --set control.rate=1000 --spin-us 1000 \
   --out "$work/bad_plant" > "$work/bad.txt" 2>&1 || status=$?
 [ "$status" -eq 2 ] && grep -q -- "--spin-us 1000" "$work/bad.txt" || { echo "status $status"; cat "$work/bad.txt"; exit 1; } >&2
+status=0
+"$bin/gausstrack-plant" --scene "$scene" --set control.mode=sampled --lockstep --spin-us 10 \
+  --out "$work/bad_plant" > "$work/bad.txt" 2>&1 || status=$?
+[ "$status" -eq 2 ] && grep -q -- "--spin-us" "$work/bad.txt" || { echo "status $status"; cat "$work/bad.txt"; exit 1; } >&2
 prefix="REALTIME$$"
 "$bin/gausstrack-run" "$scene" --rate 1000 --duration 2 --set "tracking.stabilization={zeta: 1.0, omega: 20.0}" \
   --out "$work/run" --channel-prefix "$prefix" --realtime --spin-us 200 --no-plots --log "$work/run.lcmlog" &
