@@ -42,7 +42,8 @@ status=0
 [ "$status" -eq 2 ] && grep -q -- "--spin-us" "$work/bad.txt" || { echo "status $status"; cat "$work/bad.txt"; exit 1; } >&2
 prefix="REALTIME$$"
 "$bin/gausstrack-run" "$scene" --rate 1000 --duration 2 --set "tracking.stabilization={zeta: 1.0, omega: 20.0}" \
-  --out "$work/run" --channel-prefix "$prefix" --realtime --spin-us 200 --no-plots --log "$work/run.lcmlog" &
+  --out "$work/run" --channel-prefix "$prefix" --realtime --spin-us 200 --no-plots --log "$work/run.lcmlog" \
+  > "$work/run.txt" &
 run=$!
 trap 'kill "$run" 2> /dev/null || true' EXIT
 # While it runs: each process's threads with their scheduling policy (field 41 of the thread's
@@ -62,6 +63,8 @@ while kill -0 "$run" 2> /dev/null; do
   sleep 0.05
 done
 wait "$run"
+cat "$work/run.txt"
+grep -q "deadline misses .* (200 us spun before each deadline" "$work/run.txt"   # the summary says so
 /usr/bin/python3 - "$work/threads.txt" <<'PY'
 import collections, sys
 threads = collections.defaultdict(dict)
