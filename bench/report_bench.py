@@ -468,7 +468,9 @@ def transport(d):
                     f"{us} us of a CPU per period (the plant's `spun_ms`). Under `--realtime` the spin also holds "
                     "off the plant's own LCM receive thread (one priority below its loop, on its CPU), and under "
                     "`realtime_1cpu` the controller: a command arriving during the spin is taken when the period "
-                    "starts. The floor sleeps; the section before is the same loop without the spin.")
+                    "starts. The floor sleeps; the section before is the same loop without the spin. Each case is "
+                    "one 5 s run: compare a case with the same case there, each beside its own floor (the floor "
+                    "itself moves between runs).")
     duffing_spin, duffing_text = spin("loop_vs_floor_rk4_spin")
     chain_spin, chain_text = spin("loop_vs_floor_chain8_rk4_spin")
     sections = (("loop_vs_floor_rk4", "## The same at 10 kHz with a fixed-step plant (one RK4 step per period)",
@@ -508,7 +510,7 @@ def integration_load(d):
     out = []
     for scene, adaptive, fixed, spinning in LOAD_RUNS:
         for name, label in ((adaptive, "dopri5 1e-10"), (fixed, "RK4, step 1e-4"), (spinning, "RK4, step 1e-4")):
-            evals, loop, spins = [], [], set()
+            evals, loop, spun_us, spins = [], [], [], set()
             for r in load(os.path.join(d, name), "loop_vs_floor.json") or []:
                 main = (r.get("loop_threads") or {}).get("plant", {}).get("main")
                 summary = load(os.path.join(d, name, f"loop_{r.get('tag')}"), "summary.json")
@@ -517,11 +519,12 @@ def integration_load(d):
                 if summary.get("states_published"):
                     evals.append(summary["rhs_evaluations"] / summary["states_published"])
                     loop.append(per_period_us(r, summary))
+                    spun_us.append(1e3 * summary.get("spun_ms", 0.0) / max(r["loop_periods"], 1))
                     spins.add(summary.get("spin_us", 0))
             if evals:
                 spun = ", ".join(f"{x} us spun" for x in sorted(spins) if x)
                 out.append((scene, label + (f", {spun}" if spun else ""), median(evals), cost.get(scene),
-                            median(loop)))
+                            median(loop), median(spun_us) if spun else None))
     if not out:
         return []
     lines = ["# Is the plant's integration the load?", "",
@@ -530,17 +533,20 @@ def integration_load(d):
              "times the cost of one (the scene's RK4 at its finest step in What accuracy costs, whose "
              "right-hand side also evaluates the law: an upper bound for the plant's alone), and the "
              "plant's loop thread's CPU time (wake-up, the socket's messages, the state's publication, "
-             "the integration, the sleep; less the time spun before the deadlines, where the plant spins).", "",
-             "| scene | integrator | evaluations per period | integration, at most [us] | plant's loop thread [us] "
-             "| integration's share, at most |", "|---|---|---|---|---|---|"]
+             "the integration, the sleep), less the time it spun before the deadlines where it spins, which "
+             "is shown beside it (wall time from waking to the deadline: its CPU time is at most that).", "",
+             "| scene | integrator | evaluations per period | integration, at most [us] | plant's loop thread, "
+             "less the spin [us] | spun [us] | integration's share, at most |", "|---|---|---|---|---|---|---|"]
     verdicts = {}
-    for scene, label, evals, c, loop in out:
+    for scene, label, evals, c, loop, spun in out:
+        spun_cell = "-" if spun is None else f"{spun:.1f}"
         if c is None:
-            lines.append(f"| {scene} | {label} | {evals:.1f} | - | {loop:.1f} | - |")
+            lines.append(f"| {scene} | {label} | {evals:.1f} | - | {loop:.1f} | {spun_cell} | - |")
             continue
         share = evals * c / loop if loop > 0 else math.nan
         verdicts.setdefault(scene, []).append((label, share))
-        lines.append(f"| {scene} | {label} | {evals:.1f} | {evals * c:.2f} | {loop:.1f} | {100 * share:.0f} % |")
+        lines.append(f"| {scene} | {label} | {evals:.1f} | {evals * c:.2f} | {loop:.1f} | {spun_cell} "
+                     f"| {100 * share:.0f} % |")
     lines.append("")
     for scene, shares in verdicts.items():
         worst = max(share for _, share in shares)

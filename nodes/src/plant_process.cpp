@@ -81,7 +81,7 @@ std::optional<int> parse_plant_options(int argc, char** argv, PlantProcessOption
   app.add_option("--spin-us", o.node.spin_us,
                  "real time: wake this long before each period's deadline and spin until it (fewer late periods "
                  "at high rates, for up to this much CPU time per period; less than the period)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(CLI::Range(0, 1000000))
       ->excludes(lockstep)
       ->capture_default_str();
   std::string safe_action = "zero";

@@ -57,6 +57,11 @@ def parse(argv):
     p.add_argument("--timeout-ms", type=int, default=2000, help="lock-step: longest wait for a command")
     p.add_argument("--no-plots", action="store_true")
     args = p.parse_args(argv)
+    for action in p._actions:
+        if action.option_strings and not isinstance(action, argparse._AppendAction):
+            given = [a for a in argv if a.split("=", 1)[0] in action.option_strings]
+            if len(given) > 1:
+                p.error(f"{action.option_strings[0]} given {len(given)} times")
     if args.rate <= 0 or (args.duration is not None and args.duration <= 0):
         p.error("--rate and --duration must be positive")
     if args.spin_us and args.lockstep:
@@ -217,12 +222,12 @@ def deadline_note(summary, realtime):
         return ""
     spin = summary.get("spin_us") or 0
     if spin:
-        return f" ({spin} us spun before each deadline, {summary.get('spun_ms', 0):.0f} ms in all)"
+        return f" (spinning up to {spin} us before each deadline: {summary.get('spun_ms', 0):.0f} ms in all)"
     share = summary["deadline_misses"] / max(summary["states_published"], 1)
     if share <= LATE_START_SHARE:
         return ""
-    cures = "--spin-us S" if realtime else "--spin-us S or --realtime"
-    return f" ({100 * share:.1f} % of the periods started late: {cures} starts them on time, docs/lcm.md)"
+    cures = "--spin-us S (e.g. 30 at 10 kHz)" + ("" if realtime else " or --realtime")
+    return f" ({100 * share:.1f} % of the periods started late: {cures} can start more of them on time, docs/lcm.md)"
 
 
 def print_summary(args, scene_name, mode, summary, summary_path):

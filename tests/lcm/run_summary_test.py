@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """What gausstrack-run's summary says after the deadline misses, on made-up summaries: the spin
 and its total when the plant spun; when more than 1 % of a real-time run's periods started late
-without a spin, what starts them on time (--realtime only where it was not used); nothing in
-lock-step or at 1 % or less."""
+without a spin, what can start more of them on time (--realtime only where it was not used);
+nothing in lock-step or at 1 % or less."""
 import importlib.machinery
 import importlib.util
 import os
@@ -31,13 +31,13 @@ def summary(misses, states=10000, mode="realtime", **extra):
 
 
 expect("a spinning plant", run.deadline_note(summary(3, spin_us=30, spun_ms=412.4), False),
-       says=("30 us spun", "412 ms in all"), not_says=("started late",))
+       says=("spinning up to 30 us before each deadline", "412 ms in all"), not_says=("started late",))
 expect("a spinning plant, many misses", run.deadline_note(summary(500, spin_us=30, spun_ms=1.0), False),
-       says=("30 us spun",), not_says=("started late",))
+       says=("up to 30 us",), not_says=("started late",))
 expect("2 % late, default scheduler", run.deadline_note(summary(200), False),
-       says=("2.0 % of the periods started late", "--spin-us S or --realtime"))
+       says=("2.0 % of the periods started late", "--spin-us S (e.g. 30 at 10 kHz) or --realtime"))
 expect("2 % late, --realtime", run.deadline_note(summary(200), True),
-       says=("--spin-us S starts",), not_says=("--realtime",))
+       says=("--spin-us S (e.g. 30 at 10 kHz) can start",), not_says=("--realtime",))
 # The share is of the states published (the run's periods), not of a fixed count.
 expect("1.5 % of 2000", run.deadline_note(summary(30, states=2000), False), says=("1.5 %",))
 expect("exactly 1 %", run.deadline_note(summary(100), False), not_says=("late", "spun"))
