@@ -40,10 +40,10 @@ expect("2 % late, --realtime", run.deadline_note(summary(200), True),
        says=("--spin-us S (e.g. 30 at 10 kHz) can start",), not_says=("--realtime",))
 # The share is of the states published (the run's periods), not of a fixed count.
 expect("1.5 % of 2000", run.deadline_note(summary(30, states=2000), False), says=("1.5 %",))
-expect("exactly 1 %", run.deadline_note(summary(100), False), not_says=("late", "spun"))
+expect("exactly 1 %", run.deadline_note(summary(100), False), not_says=("late", "spinning"))
 expect("under 1 %", run.deadline_note(summary(99), False), not_says=("late",))
 expect("no periods", run.deadline_note(summary(0, states=0), False), not_says=("late",))
-expect("lock-step", run.deadline_note(summary(9000, mode="lockstep", spin_us=30), False), not_says=("late", "spun"))
+expect("lock-step", run.deadline_note(summary(9000, mode="lockstep", spin_us=30), False), not_says=("late", "spinning"))
 if run.deadline_note(summary(99), False) != "" or run.deadline_note(summary(0, mode="lockstep"), False) != "":
     failures.append("nothing to say must add nothing to the line")
 
