@@ -37,31 +37,45 @@ def tool(name):
     return path
 
 
+class Once(argparse.Action):
+    """Stores an option's value and refuses the option a second time, as the C++ programs do (argparse
+    would keep the last value silently). With nargs=0, a flag that stores True."""
+
+    def __init__(self, option_strings, dest, nargs=None, **kwargs):
+        if nargs == 0:
+            kwargs.setdefault("const", True)
+            kwargs.setdefault("default", False)
+        super().__init__(option_strings, dest, nargs=nargs, **kwargs)
+        self.given = False
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if self.given:
+            parser.error(f"{self.option_strings[0]} given more than once")
+        self.given = True
+        setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
+
+
 def parse(argv):
     p = argparse.ArgumentParser(prog="gausstrack-run", description=__doc__.split("\n\n")[0])
+    p.register("action", "once", Once)
     p.add_argument("scene")
-    p.add_argument("--duration", type=float, help="run length [s] (default: the scene's)")
-    p.add_argument("--rate", type=float, default=1000.0, help="control rate [Hz] (default 1000)")
-    p.add_argument("--lockstep", action="store_true", help="the plant waits for each command")
-    p.add_argument("--log", metavar="FILE", help="record every message of the run (LCM log)")
-    p.add_argument("--out", metavar="DIR")
+    p.add_argument("--duration", action="once", type=float, help="run length [s] (default: the scene's)")
+    p.add_argument("--rate", action="once", type=float, default=1000.0, help="control rate [Hz] (default 1000)")
+    p.add_argument("--lockstep", action="once", nargs=0, help="the plant waits for each command")
+    p.add_argument("--log", action="once", metavar="FILE", help="record every message of the run (LCM log)")
+    p.add_argument("--out", action="once", metavar="DIR")
     p.add_argument("--set", action="append", default=[], metavar="key=value", help="scene override")
-    p.add_argument("--lcm-url", default="", help="default: LCM_DEFAULT_URL, else LCM's own")
-    p.add_argument("--channel-prefix", default="GAUSSTRACK")
-    p.add_argument("--realtime", action="store_true", help="SCHED_FIFO, pinning and mlockall")
-    p.add_argument("--cpus", metavar="PLANT,CONTROLLER", help="with --realtime: the CPUs to pin to")
-    p.add_argument("--spin-us", type=int, default=0,
+    p.add_argument("--lcm-url", action="once", default="", help="default: LCM_DEFAULT_URL, else LCM's own")
+    p.add_argument("--channel-prefix", action="once", default="GAUSSTRACK")
+    p.add_argument("--realtime", action="once", nargs=0, help="SCHED_FIFO, pinning and mlockall")
+    p.add_argument("--cpus", action="once", metavar="PLANT,CONTROLLER", help="with --realtime: the CPUs to pin to")
+    p.add_argument("--spin-us", action="once", type=int, default=0,
                    help="the plant wakes this long before each deadline and spins until it (less than the period)")
-    p.add_argument("--watchdog-ms", type=int, default=50)
-    p.add_argument("--safe-action", choices=("zero", "hold"), default="zero")
-    p.add_argument("--timeout-ms", type=int, default=2000, help="lock-step: longest wait for a command")
-    p.add_argument("--no-plots", action="store_true")
+    p.add_argument("--watchdog-ms", action="once", type=int, default=50)
+    p.add_argument("--safe-action", action="once", choices=("zero", "hold"), default="zero")
+    p.add_argument("--timeout-ms", action="once", type=int, default=2000, help="lock-step: longest wait for a command")
+    p.add_argument("--no-plots", action="once", nargs=0)
     args = p.parse_args(argv)
-    for action in p._actions:
-        if action.option_strings and not isinstance(action, argparse._AppendAction):
-            given = [a for a in argv if a.split("=", 1)[0] in action.option_strings]
-            if len(given) > 1:
-                p.error(f"{action.option_strings[0]} given {len(given)} times")
     if args.rate <= 0 or (args.duration is not None and args.duration <= 0):
         p.error("--rate and --duration must be positive")
     if args.spin_us and args.lockstep:

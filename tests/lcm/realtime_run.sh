@@ -23,8 +23,8 @@ for bad in "--realtime --cpus 1" "--realtime --cpus 1,x" "--realtime --cpus -1,0
   grep -q -- "--cpus" "$work/bad.txt" || { cat "$work/bad.txt" >&2; exit 1; }
 done
 # So is a spin that is negative, not shorter than the period (1000 us at 1 kHz), asked for in
-# lock-step (which has no deadlines), or given twice.
-for bad in "--spin-us -1" "--spin-us 1000" "--lockstep --spin-us 10" "--spin-us 10 --spin-us=20"; do
+# lock-step (which has no deadlines), or given twice (also as an abbreviation, which argparse takes).
+for bad in "--spin-us -1" "--spin-us 1000" "--lockstep --spin-us 10" "--spin-us 10 --spin-us=20" "--spin-us 10 --spin=20"; do
   # shellcheck disable=SC2086
   if "$bin/gausstrack-run" "$scene" --rate 1000 $bad --no-plots > "$work/bad.txt" 2>&1; then
     echo "gausstrack-run accepted $bad" >&2; exit 1
