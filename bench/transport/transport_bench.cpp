@@ -57,7 +57,7 @@ struct Pacing {
   std::unique_ptr<PeriodScheduler> scheduler;
   void start(std::size_t periods, bool spin = true) {
     if (rate_hz > 0)
-      scheduler = std::make_unique<PeriodScheduler>(static_cast<std::int64_t>(1e9 / rate_hz),
+      scheduler = std::make_unique<PeriodScheduler>(gausstrack::nodes::period_ns_at(rate_hz),
                                                     gausstrack::nodes::monotonic_ns() + 1000000, periods,
                                                     spin ? std::int64_t{spin_us} * 1000 : 0);
   }
@@ -269,7 +269,7 @@ int main(int argc, char** argv) {
     return std::fprintf(stderr, "error: --rate and --seconds must be finite\n"), 2;
   if (pacing.spin_us > 0 && !(pacing.rate_hz > 0))
     return std::fprintf(stderr, "error: --spin-us paces round trips: it needs a --rate above 0\n"), 2;
-  if (pacing.spin_us > 0 && !(pacing.spin_us * pacing.rate_hz < 1e6))
+  if (pacing.spin_us > 0 && !gausstrack::nodes::spin_fits_period(pacing.spin_us, gausstrack::nodes::period_ns_at(pacing.rate_hz)))
     return std::fprintf(stderr, "error: --spin-us %d: must be less than the period (%g us at %g Hz)\n",
                         pacing.spin_us, 1e6 / pacing.rate_hz, pacing.rate_hz),
            2;

@@ -200,7 +200,7 @@ int plant_main(int argc, char** argv, std::vector<plant_sim::ModelFactory> model
     if (scene.control_mode != ControlMode::kSampled)
       throw SceneError(o.process.scene_path + ": the plant process needs control.mode: sampled (add --set "
                                               "control.mode=sampled --set control.rate=HZ)");
-    if (!o.node.lockstep && o.node.spin_us * scene.control_rate >= 1e6) {
+    if (!o.node.lockstep && !spin_fits_period(o.node.spin_us, period_ns_at(scene.control_rate))) {
       std::fprintf(stderr, "error: --spin-us %d: must be less than the control period (%g us at %g Hz)\n",
                    o.node.spin_us, 1e6 / scene.control_rate, scene.control_rate);
       return 2;

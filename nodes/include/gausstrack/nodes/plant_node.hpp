@@ -60,6 +60,14 @@
 
 namespace gausstrack::nodes {
 
+/// The period a rate gives the plant's scheduler, to the nearest nanosecond.
+inline std::int64_t period_ns_at(double rate_hz) noexcept { return std::llround(1e9 / rate_hz); }
+/// Whether a spin of spin_us fits a period: at least 0 and shorter than it, compared in integer
+/// nanoseconds (the node and the programs that refuse a spin before making one decide alike).
+inline bool spin_fits_period(int spin_us, std::int64_t period_ns) noexcept {
+  return spin_us >= 0 && std::int64_t{spin_us} * 1000 < period_ns;
+}
+
 /// Absolute deadlines start + k * period on CLOCK_MONOTONIC: a late wake-up does not shift the
 /// deadlines after it. Counts a wake-up later than half a period as a deadline miss.
 /// Constructing one sets the calling thread's timer slack to 1 ns (PR_SET_TIMERSLACK): under the
@@ -229,7 +237,7 @@ class PlantNode {
   PlantNode(lcm::LCM& lcm, Outbox& states, const std::string& command_channel, int dimension,
             const PlantNodeOptions& o)
       : lcm_(lcm), states_(states), o_(o), codec_(checked(dimension)),
-        scheduler_(static_cast<std::int64_t>(std::llround(1e9 / o.rate_hz)), monotonic_ns(), o.periods,
+        scheduler_(period_ns_at(o.rate_hz), monotonic_ns(), o.periods,
                    std::int64_t{o.spin_us} * 1000),
         watchdog_(static_cast<std::int64_t>(o.watchdog_ms) * 1000000, monotonic_ns()),
         hold_lag_(scheduler_.period_ns(), o.hold_lag), round_trip_us_(o.periods), compute_ns_(o.periods),
@@ -242,7 +250,7 @@ class PlantNode {
     if (o.hold_lag < 0 || o.hold_lag > HoldLag::kMaxLag)
       throw std::invalid_argument("PlantNode: a hold lag of " + std::to_string(o.hold_lag) + " periods: 0 (measured) to " +
                                   std::to_string(HoldLag::kMaxLag));
-    if (o.spin_us < 0 || std::int64_t{o.spin_us} * 1000 >= scheduler_.period_ns())
+    if (!spin_fits_period(o.spin_us, scheduler_.period_ns()))
       throw std::invalid_argument("PlantNode: a spin of " + std::to_string(o.spin_us) + " us at a period of " +
                                   std::to_string(scheduler_.period_ns() / 1000) + " us: 0 to less than the period");
     const int held = dimension + o.actuators;
