@@ -53,6 +53,15 @@ TEST(Actuation, ActuatorLimitsScaleTheCommands) {
   EXPECT_NEAR(std::abs(l.control(0)), 0.5, 1e-15);
   EXPECT_NEAR(l.saturation_scale, 0.5 / std::abs(f.control(0)), 1e-15);
   EXPECT_EQ(l.force(0), l.control(0));
+  // Every part by the same factor, still adding up to u; the force's parts are B times them.
+  const double k = l.saturation_scale, scale = 1 + std::abs(f.control(0));
+  EXPECT_NEAR(l.control_closed_loop(0), k * f.control_closed_loop(0), 1e-14 * scale);
+  EXPECT_NEAR(l.control_feedforward(0), k * f.control_feedforward(0), 1e-14 * scale);
+  EXPECT_NEAR(l.control_stabilizing(0), k * f.control_stabilizing(0), 1e-14 * scale);
+  EXPECT_NEAR(l.control_closed_loop(0) + l.control_feedforward(0) + l.control_stabilizing(0), l.control(0),
+              1e-14 * scale);
+  EXPECT_EQ(l.closed_loop(0), l.control_closed_loop(0));
+  EXPECT_EQ(l.feedforward(0), l.control_feedforward(0));
   EXPECT_FALSE(limited.set_actuator_limit(Eigen::Matrix<double, 1, 1>(0.0)));
 }
 
